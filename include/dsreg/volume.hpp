@@ -1,0 +1,70 @@
+// dsreg — voxel grids and binary volumes (the first stage of the pipeline).
+//
+// Coordinate conventions (shared by every stage, see docs/conventions.md):
+//  * A grid has dims = (nx, ny, nz) voxels, spacing = (sx, sy, sz) physical units per voxel and
+//    origin = the physical position of the centre of voxel (0,0,0).
+//  * Voxel (i,j,k) is the box of size `spacing` centred at origin + spacing ⊙ (i,j,k).
+//  * Voxels are stored with x varying fastest: linear index = i + nx·(j + ny·k).
+//  * Pointel (a,b,c), a ∈ [0, nx], is the voxel corner at origin + spacing ⊙ (a−½, b−½, c−½).
+//  * Everything outside the grid is background.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace dsreg {
+
+using Index3 = std::array<std::int64_t, 3>;
+
+struct VoxelGrid {
+    Index3 dims{0, 0, 0};
+    Eigen::Vector3d spacing{1.0, 1.0, 1.0};  ///< physical size of a voxel along x, y, z
+    Eigen::Vector3d origin{0.0, 0.0, 0.0};   ///< physical centre of voxel (0,0,0)
+
+    std::int64_t voxel_count() const { return dims[0] * dims[1] * dims[2]; }
+    std::int64_t linear_index(std::int64_t i, std::int64_t j, std::int64_t k) const {
+        return i + dims[0] * (j + dims[1] * k);
+    }
+    bool contains(std::int64_t i, std::int64_t j, std::int64_t k) const {
+        return i >= 0 && j >= 0 && k >= 0 && i < dims[0] && j < dims[1] && k < dims[2];
+    }
+    /// Physical centre of voxel (i,j,k).
+    Eigen::Vector3d voxel_center(std::int64_t i, std::int64_t j, std::int64_t k) const {
+        return origin + spacing.cwiseProduct(Eigen::Vector3d(double(i), double(j), double(k)));
+    }
+    /// Physical position of pointel (a,b,c).
+    Eigen::Vector3d pointel_position(std::int64_t a, std::int64_t b, std::int64_t c) const {
+        return origin + spacing.cwiseProduct(Eigen::Vector3d(a - 0.5, b - 0.5, c - 0.5));
+    }
+};
+
+/// A binary image: mask[linear_index] != 0 for object voxels.
+struct BinaryVolume {
+    VoxelGrid grid;
+    std::vector<std::uint8_t> mask;
+
+    bool inside(std::int64_t i, std::int64_t j, std::int64_t k) const {
+        return grid.contains(i, j, k) && mask[static_cast<std::size_t>(grid.linear_index(i, j, k))] != 0;
+    }
+    std::int64_t object_voxel_count() const;
+};
+
+/// Which voxel values form the object. Default: value > 0. With `min` set the test is
+/// value ≥ min; with `max` set, value ≤ max (both inclusive, as `--min/--max` in the CLI).
+struct ValueRange {
+    bool has_min = false;
+    double min = 0.0;
+    bool has_max = false;
+    double max = 0.0;
+
+    bool contains(double value) const {
+        const bool above = has_min ? value >= min : value > 0.0;
+        const bool below = has_max ? value <= max : true;
+        return above && below;
+    }
+};
+
+}  // namespace dsreg

@@ -1,0 +1,37 @@
+// Small volumes built in code for the tests.
+#pragma once
+
+#include <functional>
+#include <initializer_list>
+
+#include "dsreg/volume.hpp"
+
+namespace dsreg::test {
+
+/// A volume of `dims` voxels (spacing 1, origin 0) whose object is {(i,j,k) : inside(i,j,k)}.
+inline BinaryVolume make_volume(const Index3& dims, const std::function<bool(double, double, double)>& inside) {
+    BinaryVolume v;
+    v.grid.dims = dims;
+    v.mask.assign(std::size_t(v.grid.voxel_count()), 0);
+    for (std::int64_t k = 0; k < dims[2]; ++k)
+        for (std::int64_t j = 0; j < dims[1]; ++j)
+            for (std::int64_t i = 0; i < dims[0]; ++i)
+                v.mask[std::size_t(v.grid.linear_index(i, j, k))] = inside(double(i), double(j), double(k)) ? 1 : 0;
+    return v;
+}
+
+/// A volume holding exactly the listed voxels.
+inline BinaryVolume make_voxels(const Index3& dims, std::initializer_list<Index3> voxels) {
+    BinaryVolume v = make_volume(dims, [](double, double, double) { return false; });
+    for (const Index3& x : voxels) v.mask[std::size_t(v.grid.linear_index(x[0], x[1], x[2]))] = 1;
+    return v;
+}
+
+/// Digital ball of radius r (voxel units) centred at c.
+inline BinaryVolume make_ball(std::int64_t size, double r, double c) {
+    return make_volume({size, size, size}, [=](double x, double y, double z) {
+        return (x - c) * (x - c) + (y - c) * (y - c) + (z - c) * (z - c) <= r * r;
+    });
+}
+
+}  // namespace dsreg::test
