@@ -1,1 +1,120 @@
 #include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <random>
+
+#include "dsreg/error.hpp"
+#include "dsreg/normals.hpp"
+#include "test_support.hpp"
+
+namespace dsreg {
+namespace {
+
+double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180.0 / M_PI;
+}
+
+/// Brute force: covariance of all object voxel centres within distance r of c.
+Eigen::Vector3d brute_force_ii_normal(const BinaryVolume& v, const Eigen::Vector3d& c, double r) {
+    double n = 0;
+    Eigen::Vector3d s1 = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d s2 = Eigen::Matrix3d::Zero();
+    for (std::int64_t k = 0; k < v.grid.dims[2]; ++k)
+        for (std::int64_t j = 0; j < v.grid.dims[1]; ++j)
+            for (std::int64_t i = 0; i < v.grid.dims[0]; ++i) {
+                const Eigen::Vector3d x = v.grid.voxel_center(i, j, k) - c;
+                if (!v.inside(i, j, k) || x.squaredNorm() > r * r) continue;
+                n += 1;
+                s1 += x;
+                s2 += x * x.transpose();
+            }
+    const Eigen::Vector3d mean = s1 / n;
+    const Eigen::Matrix3d cov = s2 / n - mean * mean.transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+    Eigen::Vector3d normal = eig.eigenvectors().col(0);
+    return mean.dot(normal) > 0 ? -normal : normal;
+}
+
+TEST(Normals, TrivialNormalsAreTheAxisNormals) {
+    const auto s = extract_digital_surface(test::make_ball(10, 3.5, 4.5), Connectivity::Six);
+    const PointMatrix u = trivial_normals(s);
+    for (std::int64_t f = 0; f < s.face_count(); ++f) {
+        EXPECT_DOUBLE_EQ(u.row(f).norm(), 1.0);
+        EXPECT_EQ(u.row(f).transpose(), s.surfels[std::size_t(f)].trivial_normal());
+    }
+}
+
+TEST(Normals, RowSumsEqualBruteForceOnAnisotropicGrid) {
+    std::mt19937 rng(3);
+    std::bernoulli_distribution coin(0.6);
+    BinaryVolume v = test::make_volume({9, 8, 7}, [&](double, double, double) { return coin(rng); });
+    v.grid.spacing = Eigen::Vector3d(0.7, 1.0, 1.9);
+    v.grid.origin = Eigen::Vector3d(-3.0, 2.0, 0.25);
+    const auto s = extract_digital_surface(v, Connectivity::TwentySix);
+    const double r = 2.3;
+    const PointMatrix u = integral_invariant_normals(v, s, r);
+    const PointMatrix c = surfel_centers(s);
+    for (std::int64_t f = 0; f < s.face_count(); f += 7) {
+        const Eigen::Vector3d expected = brute_force_ii_normal(v, c.row(f).transpose(), r);
+        EXPECT_LT(angle_deg(u.row(f).transpose(), expected), 1e-6) << "face " << f;
+    }
+}
+
+TEST(Normals, IntegralInvariantsOnABallPointRadially) {
+    const double radius = 14.0, centre = 19.5;
+    const auto ball = test::make_ball(40, radius, centre);
+    const auto s = extract_digital_surface(ball, Connectivity::Six);
+    const PointMatrix u = integral_invariant_normals(ball, s, 5.0);
+    const PointMatrix c = surfel_centers(s);
+    double sum = 0, worst = 0;
+    for (std::int64_t f = 0; f < s.face_count(); ++f) {
+        const double e = angle_deg(u.row(f).transpose(), c.row(f).transpose() - Eigen::Vector3d::Constant(centre));
+        sum += e;
+        worst = std::max(worst, e);
+        EXPECT_NEAR(u.row(f).norm(), 1.0, 1e-12);
+    }
+    const PointMatrix t = trivial_normals(s);
+    double trivial_sum = 0;
+    for (std::int64_t f = 0; f < s.face_count(); ++f)
+        trivial_sum += angle_deg(t.row(f).transpose(), c.row(f).transpose() - Eigen::Vector3d::Constant(centre));
+    EXPECT_LT(sum / double(s.face_count()), 3.0);
+    EXPECT_LT(worst, 12.0);
+    EXPECT_LT(sum, 0.2 * trivial_sum);  // far better than the axis normals
+}
+
+TEST(Normals, IntegralInvariantsOnATiltedPlane) {
+    const Eigen::Vector3d n = Eigen::Vector3d(1.0, 2.0, 3.0).normalized();
+    const auto slab = test::make_volume({40, 40, 40}, [&](double x, double y, double z) {
+        return n.dot(Eigen::Vector3d(x, y, z) - Eigen::Vector3d::Constant(19.3)) <= 0;
+    });
+    const auto s = extract_digital_surface(slab, Connectivity::Six);
+    const PointMatrix u = integral_invariant_normals(slab, s, 6.0);
+    const PointMatrix c = surfel_centers(s);
+    int checked = 0;
+    double sum = 0, worst = 0;
+    for (std::int64_t f = 0; f < s.face_count(); ++f) {
+        const Eigen::Vector3d x = c.row(f).transpose();
+        const bool interior = (x.array() > 8.0).all() && (x.array() < 31.0).all();
+        if (!interior || std::abs(n.dot(x - Eigen::Vector3d::Constant(19.3))) > 1.0) continue;
+        const double e = angle_deg(u.row(f).transpose(), n);
+        sum += e;
+        worst = std::max(worst, e);
+        ++checked;
+    }
+    ASSERT_GT(checked, 500);
+    // Digitization noise of a plane seen through a ball of radius r is O(h/r): here about 1° on average.
+    EXPECT_LT(sum / checked, 1.5);
+    EXPECT_LT(worst, 3.0);
+}
+
+TEST(Normals, RadiusMustBePositive) {
+    const auto ball = test::make_ball(8, 2.5, 3.5);
+    const auto s = extract_digital_surface(ball, Connectivity::Six);
+    EXPECT_THROW(integral_invariant_normals(ball, s, 0.0), Error);
+    EXPECT_THROW(integral_invariant_normals(ball, s, -1.0), Error);
+    EXPECT_THROW(integral_invariant_normals(ball, s, std::nan("")), Error);
+}
+
+}  // namespace
+}  // namespace dsreg
