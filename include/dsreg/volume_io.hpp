@@ -1,9 +1,13 @@
 // dsreg — reading and writing voxel volumes.
 //
 // Readers decode the voxel values and keep those inside a ValueRange as the object, so a volume
-// costs one byte per voxel in memory whatever its value type. Every reader checks the header
-// against the real size of the file (or of the decompressed payload) before allocating, and
-// throws dsreg::Error naming the file and the problem on any malformed input.
+// costs one byte per voxel in memory whatever its value type: values are thresholded as they are
+// decoded (after conversion to double, so 64-bit values above 2^53 are compared rounded).
+// Every reader checks the header against the real size of the file before allocating: a stored
+// payload must fill the rest of the file exactly; a zlib payload must be large enough to inflate
+// to the announced size (zlib cannot exceed 1032:1) and is inflated with a hard cap at that size.
+// Any malformed input throws dsreg::Error whose message starts with "<path>: " and names the
+// problem. All readers set spacing (1,1,1) and origin (0,0,0).
 #pragma once
 
 #include <cstdint>
@@ -34,23 +38,37 @@ struct VolumeLimits {
 /// float32 float64 (also u8, i16, f32, double, float ...). Throws dsreg::Error otherwise.
 RawVoxelType parse_raw_voxel_type(const std::string& name);
 
-/// DGtal .vol, versions 2 (raw bytes) and 3 (zlib payload). Spacing 1, origin 0.
+/// DGtal .vol, versions 2 (raw bytes) and 3 (zlib payload). Header: "Key: value" lines ended by
+/// a line holding a single "."; X, Y, Z (positive integers) and Version (2 or 3) are required,
+/// keys may not repeat, Voxel-Size must be 1 if present, other keys (Center-*, Alpha-Color,
+/// *-Endian) are ignored. Payload: X·Y·Z unsigned bytes, x fastest.
 BinaryVolume read_vol(const std::string& path, const ValueRange& range = {}, const VolumeLimits& limits = {});
-/// DGtal .longvol (64-bit voxel values), versions 2 and 3.
+/// DGtal .longvol: the .vol header rules, with 8-byte unsigned values stored little-endian
+/// (least significant byte first, as DGtal's LongvolWriter writes them). Lvoxel-Size is ignored:
+/// DGtal itself writes "Lvoxel-Size: 4" for its 8-byte values.
 BinaryVolume read_longvol(const std::string& path, const ValueRange& range = {}, const VolumeLimits& limits = {});
-/// PGM 3D, ASCII ("P2-3D") or binary ("P5-3D"; 1 or 2 bytes per value, big-endian).
+/// PGM 3D, ASCII ("P2-3D") or binary ("P5-3D"; 1 byte per value if maxval < 256, else 2 bytes
+/// big-endian). Header: magic, width height depth maxval (maxval in 1..65535), '#' comments
+/// allowed between them; P5-3D has exactly one whitespace byte before the data. Values above
+/// maxval, non-numeric ASCII values, missing values and trailing data are errors.
 BinaryVolume read_pgm3d(const std::string& path, const ValueRange& range = {}, const VolumeLimits& limits = {});
-/// Headerless raw volume with the given layout.
+/// Headerless raw volume with the given layout: the file must hold exactly
+/// layout.header_bytes + X·Y·Z·(bytes per value) bytes.
 BinaryVolume read_raw(const std::string& path, const RawVolumeLayout& layout, const ValueRange& range = {},
                       const VolumeLimits& limits = {});
 
-/// Chooses the reader from the file extension (.vol .longvol .pgm3d/.p3d .raw). A .raw file
-/// needs `raw_layout`; it is ignored for the other formats.
+/// Chooses the reader from the file extension, case-insensitively (.vol, .longvol or .lvol,
+/// .pgm3d or .p3d, .raw). A .raw file needs `raw_layout`; it is ignored for the other formats.
+/// Any other extension throws dsreg::Error.
 BinaryVolume read_volume(const std::string& path, const ValueRange& range = {}, const RawVolumeLayout* raw_layout = nullptr,
                          const VolumeLimits& limits = {});
 
 /// Writers (atomic: a temporary file renamed into place). `values` holds one value per voxel of
-/// `dims`, x fastest. Used by tests, fuzz seeds and users converting volumes.
+/// `dims`, x fastest. Used by tests, fuzz seeds and users converting volumes. They throw
+/// dsreg::Error (and create no file) unless dims are positive, values.size() is their product
+/// and version is 2 or 3. .vol/.longvol headers carry every key DGtal's readers require, and no
+/// Center-* keys (so DGtal reads the domain from (0,0,0)); version 3 payloads are one zlib
+/// stream, as compress() makes. write_pgm3d uses maxval = max(1, largest value).
 void write_vol(const std::string& path, const Index3& dims, const std::vector<std::uint8_t>& values, int version = 3);
 void write_longvol(const std::string& path, const Index3& dims, const std::vector<std::uint64_t>& values, int version = 3);
 void write_pgm3d(const std::string& path, const Index3& dims, const std::vector<std::uint16_t>& values, bool binary = true);

@@ -1,1 +1,292 @@
-// placeholder: being written
+// dsreg — volume I/O: format dispatch and the machinery shared by every reader (file access,
+// dimension checks, payload size checks, thresholding decoder). The formats themselves live in
+// vol_format.cpp, pgm3d_format.cpp and raw_format.cpp; zlib streams in zlib_payload.cpp.
+#include "dsreg/volume_io.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <new>
+#include <sstream>
+
+#include "dsreg/atomic_file.hpp"
+#include "dsreg/error.hpp"
+#include "volume_io_internal.hpp"
+
+namespace dsreg {
+
+namespace volume_io_detail {
+
+namespace {
+
+/// Integers print exactly, other values with enough digits to be recognised.
+std::string format_value(double value) {
+    if (value == static_cast<double>(static_cast<std::int64_t>(value)) && value > -9e18 && value < 9e18)
+        return std::to_string(static_cast<std::int64_t>(value));
+    std::ostringstream text;
+    text.precision(17);
+    text << value;
+    return text.str();
+}
+
+/// The numeric value of one encoded sample.
+double decode_sample(const std::uint8_t* sample, const SampleFormat& format) {
+    std::uint64_t bits = 0;
+    for (int i = 0; i < format.bytes; ++i) {
+        const int index = format.big_endian ? i : format.bytes - 1 - i;
+        bits = (bits << 8) | sample[index];
+    }
+    switch (format.kind) {
+    case SampleKind::Unsigned:
+        return static_cast<double>(bits);
+    case SampleKind::Signed: {
+        if (format.bytes == 8) {
+            std::int64_t value;
+            std::memcpy(&value, &bits, sizeof value);
+            return static_cast<double>(value);
+        }
+        // Sign-extend: flipping the sign bit then subtracting it maps [0, 2^n) onto [-2^(n-1), 2^(n-1)).
+        const std::uint64_t sign_bit = std::uint64_t(1) << (8 * format.bytes - 1);
+        return static_cast<double>(static_cast<std::int64_t>(bits ^ sign_bit) - static_cast<std::int64_t>(sign_bit));
+    }
+    case SampleKind::Float:
+        if (format.bytes == 4) {
+            const auto narrow = static_cast<std::uint32_t>(bits);
+            float value;
+            std::memcpy(&value, &narrow, sizeof value);
+            return static_cast<double>(value);
+        } else {
+            double value;
+            std::memcpy(&value, &bits, sizeof value);
+            return value;
+        }
+    }
+    return 0.0;
+}
+
+}  // namespace
+
+void fail(const std::string& path, const std::string& problem) { throw Error(path + ": " + problem); }
+
+std::string quote_excerpt(const std::string& text) {
+    constexpr std::size_t max_length = 40;
+    std::string shown;
+    for (std::size_t i = 0; i < text.size() && i < max_length; ++i) {
+        const auto c = static_cast<unsigned char>(text[i]);
+        shown.push_back(c >= 0x20 && c < 0x7f ? static_cast<char>(c) : '?');
+    }
+    if (text.size() > max_length) shown += "...";
+    return "'" + shown + "'";
+}
+
+std::string format_dims(const Index3& dims) {
+    return std::to_string(dims[0]) + "x" + std::to_string(dims[1]) + "x" + std::to_string(dims[2]);
+}
+
+bool parse_positive_integer(const std::string& text, std::int64_t& value) {
+    if (text.empty()) return false;
+    std::int64_t result = 0;
+    for (const char c : text) {
+        if (c < '0' || c > '9') return false;
+        const int digit = c - '0';
+        if (result > (std::numeric_limits<std::int64_t>::max() - digit) / 10) return false;
+        result = result * 10 + digit;
+    }
+    if (result == 0) return false;
+    value = result;
+    return true;
+}
+
+std::int64_t checked_voxel_count(const std::string& path, const Index3& dims, const VolumeLimits& limits) {
+    if (dims[0] <= 0 || dims[1] <= 0 || dims[2] <= 0)
+        fail(path, "dimensions " + format_dims(dims) + " must all be positive");
+    const std::int64_t limit = limits.max_voxels;
+    const std::string too_many = "dimensions " + format_dims(dims) + " exceed the limit of " + std::to_string(limit) + " voxels";
+    // Divide before multiplying so that the product never overflows.
+    if (dims[0] > limit || dims[1] > limit / dims[0]) fail(path, too_many);
+    const std::int64_t slice = dims[0] * dims[1];
+    if (dims[2] > limit / slice) fail(path, too_many);
+    return slice * dims[2];
+}
+
+BinaryVolume make_empty_volume(const std::string& path, const Index3& dims) {
+    BinaryVolume volume;
+    volume.grid.dims = dims;
+    volume.grid.spacing = Eigen::Vector3d(1.0, 1.0, 1.0);
+    volume.grid.origin = Eigen::Vector3d(0.0, 0.0, 0.0);
+    try {
+        volume.mask.assign(static_cast<std::size_t>(volume.grid.voxel_count()), 0);
+    } catch (const std::bad_alloc&) {
+        fail(path, "not enough memory for a " + format_dims(dims) + " mask (" + std::to_string(volume.grid.voxel_count()) + " bytes)");
+    }
+    return volume;
+}
+
+// ----------------------------------------------------------------------------------------------
+// InputFile
+
+InputFile::InputFile(const std::string& path) : path_(path) {
+    namespace fs = std::filesystem;
+    std::error_code error;
+    const fs::file_status status = fs::status(path, error);
+    if (status.type() == fs::file_type::not_found) fail("cannot open: no such file");
+    if (error) fail("cannot open: " + error.message());
+    if (status.type() == fs::file_type::directory) fail("cannot open: is a directory, not a volume file");
+    if (status.type() != fs::file_type::regular) fail("cannot open: not a regular file");
+    size_ = fs::file_size(path, error);
+    if (error) fail("cannot determine the file size: " + error.message());
+    errno = 0;
+    if (buffer_.open(path, std::ios::in | std::ios::binary) == nullptr)
+        fail(std::string("cannot open for reading: ") + (errno != 0 ? std::strerror(errno) : "unknown error"));
+}
+
+int InputFile::get() {
+    const auto c = buffer_.sbumpc();
+    if (c == std::filebuf::traits_type::eof()) return -1;
+    ++position_;
+    return c;
+}
+
+int InputFile::peek() {
+    const auto c = buffer_.sgetc();
+    return c == std::filebuf::traits_type::eof() ? -1 : c;
+}
+
+std::size_t InputFile::read(std::uint8_t* destination, std::size_t count) {
+    const std::streamsize got = buffer_.sgetn(reinterpret_cast<char*>(destination), static_cast<std::streamsize>(count));
+    const std::size_t read_count = got > 0 ? static_cast<std::size_t>(got) : 0;
+    position_ += read_count;
+    return read_count;
+}
+
+void InputFile::skip(std::uint64_t count) {
+    if (count > remaining())
+        fail("the file holds " + std::to_string(size_) + " bytes, too few to skip " + std::to_string(count) +
+             " bytes from offset " + std::to_string(position_));
+    const auto target = static_cast<std::streamoff>(position_ + count);
+    if (buffer_.pubseekpos(target, std::ios::in) != std::streampos(target)) fail("cannot seek to offset " + std::to_string(target));
+    position_ += count;
+}
+
+// ----------------------------------------------------------------------------------------------
+// MaskWriter
+
+MaskWriter::MaskWriter(const std::string& path, SampleFormat format, const ValueRange& range, std::vector<std::uint8_t>& mask)
+    : path_(path), format_(format), range_(range), mask_(mask) {
+    if (format_.bytes == 1) {
+        use_byte_table_ = true;
+        for (int byte = 0; byte < 256; ++byte) {
+            const auto encoded = static_cast<std::uint8_t>(byte);
+            byte_table_[byte] = range_.contains(decode_sample(&encoded, format_)) ? 1 : 0;
+        }
+    }
+}
+
+void MaskWriter::reject_values_above(double max_value, const std::string& limit_name) {
+    has_max_ = true;
+    max_value_ = max_value;
+    max_name_ = limit_name;
+}
+
+void MaskWriter::emit(const std::uint8_t* sample) {
+    if (written_ >= mask_.size()) fail(path_, "payload holds more values than the " + std::to_string(mask_.size()) + " voxels announced");
+    if (use_byte_table_ && !has_max_) {
+        mask_[written_++] = byte_table_[*sample];
+        return;
+    }
+    const double value = decode_sample(sample, format_);
+    if (has_max_ && value > max_value_)
+        fail(path_, "value " + format_value(value) + " of voxel #" + std::to_string(written_) + " exceeds " + max_name_ + " " +
+                        format_value(max_value_));
+    mask_[written_++] = range_.contains(value) ? 1 : 0;
+}
+
+void MaskWriter::consume(const std::uint8_t* data, std::size_t count) {
+    const auto width = static_cast<std::size_t>(format_.bytes);
+    // Complete a sample left over from the previous chunk.
+    if (pending_size_ > 0) {
+        const std::size_t taken = std::min(count, width - pending_size_);
+        std::memcpy(pending_ + pending_size_, data, taken);
+        pending_size_ += taken;
+        data += taken;
+        count -= taken;
+        if (pending_size_ < width) return;
+        emit(pending_);
+        pending_size_ = 0;
+    }
+    for (; count >= width; data += width, count -= width) emit(data);
+    // Keep the incomplete tail (fewer than `width` ≤ 8 bytes) for the next chunk.
+    pending_size_ = std::min(count, sizeof pending_);
+    if (pending_size_ > 0) std::memcpy(pending_, data, pending_size_);
+}
+
+// ----------------------------------------------------------------------------------------------
+// Payload size checks and stored (uncompressed) payloads
+
+std::string describe_payload(const Index3& dims, std::int64_t voxels, int bytes_per_value) {
+    std::string text = format_dims(dims) + " = " + std::to_string(voxels) + " voxels";
+    if (bytes_per_value > 1)
+        text += " x " + std::to_string(bytes_per_value) + " bytes = " + std::to_string(voxels * bytes_per_value) + " bytes";
+    return text;
+}
+
+std::uint64_t payload_bytes(const std::string& path, std::int64_t voxels, int bytes_per_value) {
+    if (voxels > std::numeric_limits<std::int64_t>::max() / bytes_per_value)
+        fail(path, std::to_string(voxels) + " voxels of " + std::to_string(bytes_per_value) + " bytes overflow a 64-bit size");
+    return static_cast<std::uint64_t>(voxels) * static_cast<std::uint64_t>(bytes_per_value);
+}
+
+void require_exact_payload(const InputFile& file, std::uint64_t expected_bytes, const std::string& description) {
+    const std::uint64_t available = file.remaining();
+    const std::string holds =
+        "file holds " + std::to_string(available) + " bytes" + (file.position() > 0 ? " after the header" : "");
+    if (available < expected_bytes) file.fail("truncated payload: " + description + ", " + holds);
+    if (available > expected_bytes)
+        file.fail(std::to_string(available - expected_bytes) + " trailing bytes after the payload: " + description + ", " + holds);
+}
+
+void decode_stored_payload(InputFile& file, MaskWriter& sink) {
+    std::vector<std::uint8_t> chunk(std::size_t(1) << 20);
+    while (!sink.complete()) {
+        const std::size_t got = file.read(chunk.data(), chunk.size());
+        if (got == 0)
+            file.fail("truncated payload: the file ended (or could not be read) after " + std::to_string(sink.samples_written()) +
+                      " values");
+        sink.consume(chunk.data(), got);
+    }
+    if (file.peek() != -1) file.fail("trailing bytes after the payload (the file grew while being read?)");
+}
+
+void check_writer_input(const std::string& path, const Index3& dims, std::size_t value_count) {
+    VolumeLimits unlimited;
+    unlimited.max_voxels = std::numeric_limits<std::int64_t>::max();
+    const std::int64_t voxels = checked_voxel_count(path, dims, unlimited);
+    if (static_cast<std::uint64_t>(voxels) != value_count)
+        fail(path, "cannot write: " + std::to_string(value_count) + " values given for dimensions " + format_dims(dims) + " (" +
+                       std::to_string(voxels) + " voxels)");
+}
+
+}  // namespace volume_io_detail
+
+// ----------------------------------------------------------------------------------------------
+// Dispatch on the file extension
+
+BinaryVolume read_volume(const std::string& path, const ValueRange& range, const RawVolumeLayout* raw_layout,
+                         const VolumeLimits& limits) {
+    const std::string extension = file_extension(path);
+    if (extension == "vol") return read_vol(path, range, limits);
+    if (extension == "longvol" || extension == "lvol") return read_longvol(path, range, limits);
+    if (extension == "pgm3d" || extension == "p3d") return read_pgm3d(path, range, limits);
+    if (extension == "raw") {
+        if (raw_layout == nullptr)
+            volume_io_detail::fail(path, "a .raw volume has no header: its layout (dimensions, voxel type, byte order) must be given");
+        return read_raw(path, *raw_layout, range, limits);
+    }
+    const std::string shown = extension.empty() ? "no extension" : "unknown extension '." + extension + "'";
+    volume_io_detail::fail(path, "cannot tell the volume format: " + shown +
+                                     " (expected .vol, .longvol, .lvol, .pgm3d, .p3d or .raw)");
+}
+
+}  // namespace dsreg

@@ -1,0 +1,159 @@
+// dsreg — shared machinery of the volume readers and writers (not part of the public API).
+//
+// Every reader follows the same plan:
+//   1. open the file (InputFile) and parse its header;
+//   2. validate the dimensions (checked_voxel_count) and check the payload size against the
+//      real file size (require_exact_payload / require_plausible_zlib_payload) — all before
+//      allocating anything proportional to the header's claims;
+//   3. allocate the mask (make_empty_volume) and decode the payload through a MaskWriter, which
+//      thresholds each value as soon as it is decoded, so no full-precision copy is ever kept.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <fstream>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include <zlib.h>
+
+#include "dsreg/volume.hpp"
+#include "dsreg/volume_io.hpp"
+
+namespace dsreg::volume_io_detail {
+
+/// Throws dsreg::Error("<path>: <problem>").
+[[noreturn]] void fail(const std::string& path, const std::string& problem);
+
+/// Printable, bounded excerpt of untrusted text for error messages.
+std::string quote_excerpt(const std::string& text);
+
+/// "5x4x3".
+std::string format_dims(const Index3& dims);
+
+/// Parses a whole string as a positive decimal integer (no sign, no trailing characters, no
+/// overflow). Returns false otherwise.
+bool parse_positive_integer(const std::string& text, std::int64_t& value);
+
+/// Number of voxels of `dims`; throws (naming `path`) unless every dimension is positive and the
+/// product is at most limits.max_voxels.
+std::int64_t checked_voxel_count(const std::string& path, const Index3& dims, const VolumeLimits& limits);
+
+/// A volume with `dims`, spacing 1, origin 0 and an all-background mask. Throws dsreg::Error
+/// naming `path` if the mask cannot be allocated.
+BinaryVolume make_empty_volume(const std::string& path, const Index3& dims);
+
+/// A regular file opened for reading, with its size known up front and the read position tracked.
+class InputFile {
+public:
+    explicit InputFile(const std::string& path);  ///< throws dsreg::Error naming the file
+
+    const std::string& path() const { return path_; }
+    std::uint64_t size() const { return size_; }
+    std::uint64_t position() const { return position_; }
+    std::uint64_t remaining() const { return position_ < size_ ? size_ - position_ : 0; }
+
+    int get();   ///< next byte, or -1 at end of file
+    int peek();  ///< next byte without consuming it, or -1
+    /// Reads up to `count` bytes; fewer only at end of file (or on a read error).
+    std::size_t read(std::uint8_t* destination, std::size_t count);
+    void skip(std::uint64_t count);  ///< throws if the file is shorter
+
+    [[noreturn]] void fail(const std::string& problem) const { volume_io_detail::fail(path_, problem); }
+
+private:
+    std::string path_;
+    std::filebuf buffer_;
+    std::uint64_t size_ = 0;
+    std::uint64_t position_ = 0;
+};
+
+/// How one voxel value is encoded in a payload.
+enum class SampleKind { Unsigned, Signed, Float };
+struct SampleFormat {
+    int bytes = 1;  ///< 1, 2, 4 or 8
+    SampleKind kind = SampleKind::Unsigned;
+    bool big_endian = false;
+};
+
+/// Decodes a stream of encoded samples, in voxel order, into mask bytes (1 = value in range).
+/// Bytes may arrive in chunks of any size: a sample split between chunks is completed by the
+/// next call. Optionally rejects values above a maximum (PGM's maxval).
+class MaskWriter {
+public:
+    MaskWriter(const std::string& path, SampleFormat format, const ValueRange& range, std::vector<std::uint8_t>& mask);
+
+    /// Values above `max_value` make consume() throw (naming the file and the voxel).
+    void reject_values_above(double max_value, const std::string& limit_name);
+
+    void consume(const std::uint8_t* data, std::size_t count);
+
+    std::uint64_t samples_written() const { return written_; }
+    bool complete() const { return written_ == mask_.size() && pending_size_ == 0; }
+
+private:
+    void emit(const std::uint8_t* sample);
+
+    std::string path_;
+    SampleFormat format_;
+    ValueRange range_;
+    std::vector<std::uint8_t>& mask_;
+    bool use_byte_table_ = false;
+    std::uint8_t byte_table_[256] = {};  ///< mask value of each byte, for 1-byte samples
+    bool has_max_ = false;
+    double max_value_ = 0.0;
+    std::string max_name_;
+    std::uint8_t pending_[8] = {};
+    std::size_t pending_size_ = 0;
+    std::uint64_t written_ = 0;
+};
+
+/// "5x4x3 = 60 voxels" or, for wider samples, "5x4x3 = 60 voxels x 8 bytes = 480 bytes".
+std::string describe_payload(const Index3& dims, std::int64_t voxels, int bytes_per_value);
+
+/// voxels × bytes_per_value, or throws (naming `path`) if it overflows.
+std::uint64_t payload_bytes(const std::string& path, std::int64_t voxels, int bytes_per_value);
+
+/// Throws unless the rest of the file holds exactly `expected_bytes` (truncated / trailing bytes).
+void require_exact_payload(const InputFile& file, std::uint64_t expected_bytes, const std::string& description);
+
+/// Throws if the rest of the file is too small to inflate to `expected_bytes`, given zlib's
+/// maximum compression ratio (1032:1): a lying header must not make us allocate.
+void require_plausible_zlib_payload(const InputFile& file, std::uint64_t expected_bytes, const std::string& description);
+
+/// Feeds the rest of the file (exactly the expected size, already checked) to `sink`.
+void decode_stored_payload(InputFile& file, MaskWriter& sink);
+
+/// Inflates the zlib stream filling the rest of the file into `sink`, with a hard cap at
+/// `expected_bytes`: more output, less output, a corrupt stream or bytes after the end of the
+/// stream all throw, naming the file.
+void decode_zlib_payload(InputFile& file, std::uint64_t expected_bytes, MaskWriter& sink, const std::string& description);
+
+/// Writes a payload to a stream, either as is or as one zlib stream (what zlib's compress()
+/// would produce), in bounded chunks.
+class PayloadWriter {
+public:
+    PayloadWriter(const std::string& path, std::ostream& out, bool compress);
+    ~PayloadWriter();
+    PayloadWriter(const PayloadWriter&) = delete;
+    PayloadWriter& operator=(const PayloadWriter&) = delete;
+
+    void write(const std::uint8_t* data, std::size_t count);
+    void finish();  ///< must be called once, after the last write()
+
+private:
+    void deflate_pending(int flush);
+
+    std::string path_;
+    std::ostream& out_;
+    bool compress_;
+    bool finished_ = false;
+    z_stream stream_{};
+    std::vector<std::uint8_t> chunk_;
+};
+
+/// Throws (naming `path`) unless dims are positive and `value_count` equals their product.
+void check_writer_input(const std::string& path, const Index3& dims, std::size_t value_count);
+
+}  // namespace dsreg::volume_io_detail
