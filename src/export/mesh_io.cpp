@@ -1,1 +1,100 @@
-// placeholder: being written
+// dsreg — mesh files: choice of the format, checks before writing, quad triangulation.
+// The formats themselves live in obj_format.cpp, off_format.cpp, ply_format.cpp, stl_format.cpp.
+#include "dsreg/mesh_io.hpp"
+
+#include <filesystem>
+#include <fstream>
+
+#include "dsreg/atomic_file.hpp"
+#include "dsreg/error.hpp"
+#include "mesh_format.hpp"
+
+namespace dsreg {
+
+namespace {
+
+enum class MeshFormat { Obj, Off, Ply, Stl };
+
+MeshFormat format_of(const std::string& path) {
+    const std::string extension = file_extension(path);
+    if (extension == "obj") return MeshFormat::Obj;
+    if (extension == "off") return MeshFormat::Off;
+    if (extension == "ply") return MeshFormat::Ply;
+    if (extension == "stl") return MeshFormat::Stl;
+    const std::string problem =
+        extension.empty() ? "has no file extension" : "has unknown extension '." + extension + "'";
+    throw Error(path + ": " + problem + "; supported mesh formats are .obj, .off, .ply and .stl");
+}
+
+std::string read_file_content(const std::string& path) {
+    std::error_code error;
+    const auto status = std::filesystem::status(path, error);
+    if (!std::filesystem::exists(status)) throw Error(path + ": no such file");
+    if (std::filesystem::is_directory(status)) throw Error(path + ": is a directory, not a mesh file");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error(path + ": cannot open file for reading");
+    in.seekg(0, std::ios::end);
+    const std::streamoff size = in.tellg();
+    in.seekg(0, std::ios::beg);
+    if (size < 0 || !in) throw Error(path + ": cannot determine the size of the file");
+    std::string content(static_cast<std::size_t>(size), '\0');
+    in.read(content.data(), size);
+    if (in.gcount() != size) throw Error(path + ": read failed");
+    return content;
+}
+
+}  // namespace
+
+PolygonMesh triangulate_shorter_diagonal(const PolygonMesh& mesh) {
+    mesh_format::check_faces("triangulate_shorter_diagonal", mesh);
+    if (mesh.faces.cols() == 3) return mesh;
+
+    PolygonMesh result;
+    result.vertices = mesh.vertices;
+    result.vertex_scalars = mesh.vertex_scalars;
+    const Eigen::Index quad_count = mesh.faces.rows();
+    const bool with_normals = mesh.face_normals.rows() > 0;
+    result.faces.resize(2 * quad_count, 3);
+    if (with_normals) result.face_normals.resize(2 * quad_count, 3);
+    for (Eigen::Index q = 0; q < quad_count; ++q) {
+        const auto triangles = mesh_format::split_quad(mesh.vertices, mesh.faces.row(q).data());
+        for (int t = 0; t < 2; ++t) {
+            result.faces.row(2 * q + t) << triangles[t][0], triangles[t][1], triangles[t][2];
+            if (with_normals) result.face_normals.row(2 * q + t) = mesh.face_normals.row(q);
+        }
+    }
+    return result;
+}
+
+void write_mesh(const std::string& path, const PolygonMesh& mesh) {
+    const MeshFormat format = format_of(path);
+    mesh_format::check_mesh_for_writing(path, mesh);
+    switch (format) {
+        case MeshFormat::Obj:
+            return mesh_format::write_obj(path, mesh);
+        case MeshFormat::Off:
+            return mesh_format::write_off(path, mesh);
+        case MeshFormat::Ply:
+            return mesh_format::write_ply(path, mesh);
+        case MeshFormat::Stl:
+            return mesh_format::write_stl(path, mesh);
+    }
+}
+
+PolygonMesh read_mesh(const std::string& path) {
+    const MeshFormat format = format_of(path);
+    const std::string content = read_file_content(path);
+    switch (format) {
+        case MeshFormat::Obj:
+            return mesh_format::read_obj(path, content);
+        case MeshFormat::Off:
+            return mesh_format::read_off(path, content);
+        case MeshFormat::Ply:
+            return mesh_format::read_ply(path, content);
+        case MeshFormat::Stl:
+            return mesh_format::read_stl(path, content);
+    }
+    throw Error(path + ": unsupported mesh format");  // not reached
+}
+
+}  // namespace dsreg
