@@ -68,6 +68,8 @@ struct RegularizationResult {
     SolveReport solve;
     EnergyTerms energy_before;  ///< terms at p̂ = p
     EnergyTerms energy_after;   ///< terms at p̂ = p*
+    double assembly_seconds = 0;  ///< wall time to build R and b
+    double solve_seconds = 0;     ///< wall time of the solver (factorization included)
 };
 
 /// The whole fourth stage: links, assembly of eq. (22–23), solve, energies before and after.

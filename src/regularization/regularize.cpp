@@ -1,15 +1,23 @@
 #include "dsreg/regularization.hpp"
 
+#include <chrono>
+
 namespace dsreg {
 
 RegularizationResult regularize(const DigitalSurface& surface, const PointMatrix& normals,
                                 const RegularizationWeights& weights, const SolverOptions& solver) {
+    using Clock = std::chrono::steady_clock;
+    const auto seconds_since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+    RegularizationResult result;
+    auto started = Clock::now();
     const VertexLinks links = vertex_links(surface.quads, surface.vertex_count());
     const RegularizationSystem system =
         assemble_regularization_system(surface.vertices, surface.quads, links, normals, weights);
+    result.assembly_seconds = seconds_since(started);
     Eigen::VectorXd x = flatten_points(surface.vertices);  // warm start at p
-    RegularizationResult result;
+    started = Clock::now();
     result.solve = solve_spd(system.matrix, system.rhs, x, solver);
+    result.solve_seconds = seconds_since(started);
     result.positions = unflatten_points(x);
     result.energy_before = regularization_energy(surface.vertices, surface.vertices, surface.quads, links, normals, weights);
     result.energy_after = regularization_energy(result.positions, surface.vertices, surface.quads, links, normals, weights);

@@ -1,0 +1,28 @@
+// dsreg — command-line tool: digital surface regularization by normal vector field alignment.
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "dsreg/error.hpp"
+#include "regularize_command.hpp"
+
+int main(int argc, char** argv) {
+    CLI::App app{"dsreg: smooth quad meshes from 3D binary images (digital surface regularization, DGCI 2017)"};
+    app.require_subcommand(1);
+    app.set_version_flag("--version", std::string("dsreg ") + DSREG_VERSION);
+    dsreg::cli::add_regularize_command(app);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e);
+    } catch (const dsreg::Error& e) {
+        std::cerr << "dsreg: error: " << e.what() << '\n';
+        return 1;
+    } catch (const std::bad_alloc&) {
+        std::cerr << "dsreg: error: out of memory\n";
+        return 1;
+    } catch (const std::exception& e) {
+        std::cerr << "dsreg: error: " << e.what() << '\n';
+        return 1;
+    }
+    return 0;
+}

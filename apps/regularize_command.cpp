@@ -1,0 +1,177 @@
+#include "regularize_command.hpp"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+
+#include "dsreg/atomic_file.hpp"
+#include "dsreg/digital_surface.hpp"
+#include "dsreg/error.hpp"
+#include "dsreg/mesh_io.hpp"
+#include "dsreg/normals.hpp"
+#include "dsreg/regularization.hpp"
+#include "output_paths.hpp"
+#include "stage_clock.hpp"
+#include "volume_source.hpp"
+
+namespace dsreg::cli {
+
+namespace {
+
+struct RegularizeOptions {
+    VolumeSourceOptions source;
+    int connectivity = 26;
+    std::string normals = "ii";
+    std::optional<double> radius;
+    double alpha = 1e-3, beta = 1.0, gamma = 1e-2;
+    std::string solver = "cholmod";
+    std::string output, input_mesh, report;
+    bool triangulate = false, quiet = false, verbose = false;
+};
+
+std::string format(const char* pattern, double value) {
+    char text[64];
+    std::snprintf(text, sizeof text, pattern, value);
+    return text;
+}
+
+PolygonMesh make_mesh(const DigitalSurface& surface, const PointMatrix& positions, const PointMatrix& normals,
+                      bool triangulate) {
+    PolygonMesh mesh;
+    mesh.vertices = positions;
+    mesh.faces = surface.quads;
+    mesh.face_normals = normals;
+    return triangulate ? triangulate_shorter_diagonal(mesh) : mesh;
+}
+
+nlohmann::json energy_json(const EnergyTerms& e, const RegularizationWeights& w) {
+    return {{"data", e.data}, {"alignment", e.alignment}, {"fairness", e.fairness}, {"total", e.total(w)}};
+}
+
+void check_options(const RegularizeOptions& o) {
+    check_mesh_output_path("-o", o.output);
+    if (!o.input_mesh.empty()) check_mesh_output_path("--input-mesh", o.input_mesh);
+    if (!o.report.empty()) check_output_folder("--report", o.report);
+    if (o.normals != "ii" && o.normals != "trivial") throw Error("--normals " + o.normals + ": choose ii or trivial");
+    if (o.radius && (!(*o.radius > 0) || !std::isfinite(*o.radius))) throw Error("--radius must be positive");
+    parse_solver_kind(o.solver);
+    RegularizationWeights weights{o.alpha, o.beta, o.gamma, {}, {}};
+    validate_weights(weights, 0, 0);
+}
+
+void run(const RegularizeOptions& o) {
+    check_options(o);
+    const bool progress = !o.quiet && (o.verbose || isatty(STDERR_FILENO));
+    StageClock clock(progress);
+
+    clock.start(o.source.shape.empty() ? "read" : "digitize");
+    const LoadedVolume loaded = load_volume(o.source);
+    const std::int64_t object_voxels = loaded.volume.object_voxel_count();
+    clock.finish(std::to_string(object_voxels) + " object voxels");
+
+    clock.start("surface");
+    const DigitalSurface surface = extract_digital_surface(
+        loaded.volume, o.connectivity == 6 ? Connectivity::Six : Connectivity::TwentySix);
+    clock.finish(std::to_string(surface.face_count()) + " surfels, " + std::to_string(surface.vertex_count()) +
+                 " vertices, " + std::to_string(surface.component_count) + " components");
+
+    clock.start("normals");
+    const double radius = o.radius ? *o.radius : default_ii_radius(loaded);
+    const PointMatrix normals = o.normals == "ii" ? integral_invariant_normals(loaded.volume, surface, radius)
+                                                  : trivial_normals(surface);
+    clock.finish(o.normals == "ii" ? "integral invariants, r = " + format("%g", radius) : "trivial");
+
+    clock.start("regularize");
+    const RegularizationWeights weights{o.alpha, o.beta, o.gamma, {}, {}};
+    SolverOptions solver;
+    solver.kind = parse_solver_kind(o.solver);
+    const RegularizationResult result = regularize(surface, normals, weights, solver);
+    clock.finish(result.solve.solver + ", relative residual " + format("%.2e", result.solve.relative_residual));
+
+    clock.start("write");
+    write_mesh(o.output, make_mesh(surface, result.positions, normals, o.triangulate));
+    if (!o.input_mesh.empty()) write_mesh(o.input_mesh, make_mesh(surface, surface.vertices, normals, o.triangulate));
+    clock.finish(o.output);
+
+    if (!o.report.empty()) {
+        nlohmann::json report;
+        report["input"] = loaded.description;
+        report["grid"] = {{"dims", loaded.volume.grid.dims},
+                          {"spacing", {loaded.volume.grid.spacing.x(), loaded.volume.grid.spacing.y(), loaded.volume.grid.spacing.z()}},
+                          {"origin", {loaded.volume.grid.origin.x(), loaded.volume.grid.origin.y(), loaded.volume.grid.origin.z()}}};
+        report["counts"] = {{"voxels", loaded.volume.grid.voxel_count()},
+                            {"object_voxels", object_voxels},
+                            {"surfels", surface.face_count()},
+                            {"vertices", surface.vertex_count()},
+                            {"components", surface.component_count},
+                            {"split_pointels", surface.split_pointel_count},
+                            {"euler_characteristics", component_euler_characteristics(surface)}};
+        report["parameters"] = {{"alpha", o.alpha}, {"beta", o.beta}, {"gamma", o.gamma},
+                                {"connectivity", o.connectivity}, {"normals", o.normals},
+                                {"radius", o.normals == "ii" ? nlohmann::json(radius) : nlohmann::json(nullptr)},
+                                {"solver", result.solve.solver}, {"triangulate", o.triangulate}};
+        report["solve"] = {{"relative_residual", result.solve.relative_residual},
+                           {"iterations", result.solve.iterations},
+                           {"factor_nonzeros", result.solve.factor_nonzeros},
+                           {"unknowns", 3 * surface.vertex_count()}};
+        report["energy_before"] = energy_json(result.energy_before, weights);
+        report["energy_after"] = energy_json(result.energy_after, weights);
+        nlohmann::json stages = nlohmann::json::object();
+        for (const auto& [name, seconds] : clock.stage_seconds()) stages[name] = seconds;
+        stages["assembly"] = result.assembly_seconds;
+        stages["solve"] = result.solve_seconds;
+        report["seconds"] = stages;
+        report["total_seconds"] = clock.total_seconds();
+        report["peak_memory_bytes"] = peak_memory_bytes();
+        report["outputs"] = {{"mesh", o.output}, {"input_mesh", o.input_mesh}};
+        const std::string text = report.dump(2) + "\n";
+        write_file_atomically(o.report, [&](std::ostream& out) { out << text; });
+    }
+
+    if (!o.quiet) {
+        std::ostringstream line;
+        line << "dsreg: " << loaded.description << ": " << surface.face_count() << " surfels, " << surface.vertex_count()
+             << " vertices, " << surface.component_count << (surface.component_count == 1 ? " component" : " components")
+             << "; energy " << format("%.4g", result.energy_before.total(weights)) << " -> "
+             << format("%.4g", result.energy_after.total(weights)) << "; " << result.solve.solver << " residual "
+             << format("%.1e", result.solve.relative_residual) << "; " << format("%.2f", clock.total_seconds()) << " s, "
+             << human_bytes(peak_memory_bytes()) << " peak -> " << o.output;
+        std::cerr << line.str() << '\n';
+    }
+}
+
+}  // namespace
+
+void add_regularize_command(CLI::App& app) {
+    auto options = std::make_shared<RegularizeOptions>();
+    CLI::App* cmd = app.add_subcommand("regularize", "Regularize the digital surface of a volume into a smooth quad mesh");
+    add_volume_source_options(*cmd, options->source);
+    cmd->add_option("-o,--output", options->output, "Output mesh: .obj .off .ply (quads) or .stl (triangles)")->required();
+    cmd->add_option("--connectivity", options->connectivity,
+                    "Object connectivity where voxels touch by an edge: 6 keeps them apart, 26 joins them")
+        ->check(CLI::IsMember({6, 26}))
+        ->capture_default_str();
+    cmd->add_option("--normals", options->normals, "Input normal field: ii (integral invariants) or trivial")
+        ->check(CLI::IsMember({"ii", "trivial"}))
+        ->capture_default_str();
+    cmd->add_option("--radius", options->radius,
+                    "Integral invariant radius, physical units (default: 3 voxels for files, 3·h^(1/3) for --shape)");
+    cmd->add_option("--alpha", options->alpha, "Weight of data attachment (> 0)")->capture_default_str();
+    cmd->add_option("--beta", options->beta, "Weight of normal alignment (>= 0)")->capture_default_str();
+    cmd->add_option("--gamma", options->gamma, "Weight of fairness (>= 0)")->capture_default_str();
+    cmd->add_option("--solver", options->solver, "Linear solver: cholmod (sparse Cholesky) or cg (conjugate gradient)")
+        ->check(CLI::IsMember(solver_names()))
+        ->capture_default_str();
+    cmd->add_flag("--triangulate", options->triangulate, "Split each quad along its shorter diagonal");
+    cmd->add_option("--input-mesh", options->input_mesh, "Also write the unregularized digital surface to this file");
+    cmd->add_option("--report", options->report, "Write counts, timings, energies and parameters as JSON");
+    cmd->add_flag("-q,--quiet", options->quiet, "Print nothing but errors");
+    cmd->add_flag("-v,--verbose", options->verbose, "Print each stage as it finishes");
+    cmd->callback([options] { run(*options); });
+}
+
+}  // namespace dsreg::cli

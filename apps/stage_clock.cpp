@@ -1,0 +1,52 @@
+#include "stage_clock.hpp"
+
+#include <sys/resource.h>
+
+#include <cstdio>
+#include <iostream>
+
+namespace dsreg::cli {
+
+void StageClock::start(const std::string& name) {
+    if (!current_.empty()) finish();
+    current_ = name;
+    started_ = Clock::now();
+}
+
+void StageClock::finish(const std::string& detail) {
+    if (current_.empty()) return;
+    const double seconds = std::chrono::duration<double>(Clock::now() - started_).count();
+    stages_.emplace_back(current_, seconds);
+    if (verbose_) {
+        char line[64];
+        std::snprintf(line, sizeof line, "%8.3f s", seconds);
+        std::cerr << "dsreg: " << current_ << ' ' << line << (detail.empty() ? "" : "  " + detail) << '\n';
+    }
+    current_.clear();
+}
+
+double StageClock::total_seconds() const {
+    double total = 0;
+    for (const auto& stage : stages_) total += stage.second;
+    return total;
+}
+
+double peak_memory_bytes() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return double(usage.ru_maxrss) * 1024.0;  // Linux reports KiB
+}
+
+std::string human_bytes(double bytes) {
+    const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB"};
+    int u = 0;
+    while (bytes >= 1024.0 && u < 4) {
+        bytes /= 1024.0;
+        ++u;
+    }
+    char text[32];
+    std::snprintf(text, sizeof text, u == 0 ? "%.0f %s" : "%.1f %s", bytes, units[u]);
+    return text;
+}
+
+}  // namespace dsreg::cli

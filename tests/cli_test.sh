@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# End-to-end checks of the dsreg command: outputs, report, exit codes, error messages, and that
+# a failed run leaves no output behind and never truncates an existing file.
+set -u
+: "${DSREG:?set DSREG to the dsreg executable}"
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+failures=0
+passes=0
+
+check() {  # check NAME COMMAND... : the command must succeed
+    local name=$1; shift
+    if "$@"; then passes=$((passes + 1)); else echo "FAIL: $name"; failures=$((failures + 1)); fi
+}
+
+expect_error() {  # expect_error NAME TEXT ARGS... : dsreg ARGS fails, mentions TEXT, leaves no $work/out.*
+    local name=$1 text=$2; shift 2
+    rm -f "$work"/out.*
+    local err
+    err=$("$DSREG" "$@" 2>&1 >/dev/null)
+    local code=$?
+    if [[ $code -eq 0 ]]; then echo "FAIL: $name: exit code 0"; failures=$((failures + 1)); return; fi
+    if [[ $err != *"$text"* ]]; then echo "FAIL: $name: message '$err' lacks '$text'"; failures=$((failures + 1)); return; fi
+    if compgen -G "$work/out.*" >/dev/null || compgen -G "$work/.out*" >/dev/null; then
+        echo "FAIL: $name: output file left behind"; failures=$((failures + 1)); return
+    fi
+    passes=$((passes + 1))
+}
+
+# A successful run writes the mesh, the digital surface and a report.
+"$DSREG" regularize --shape sphere9 --h 1 -o "$work/sphere.obj" --input-mesh "$work/digital.ply" \
+    --report "$work/report.json" -q
+check "regularize exits 0" test $? -eq 0
+check "mesh written" test -s "$work/sphere.obj"
+check "digital surface written" test -s "$work/digital.ply"
+check "report has residual" grep -q '"relative_residual"' "$work/report.json"
+check "report has energies" grep -q '"energy_after"' "$work/report.json"
+faces=$(grep -c '^f ' "$work/sphere.obj")
+surfels=$(grep -o '"surfels": [0-9]*' "$work/report.json" | grep -o '[0-9]*$')
+check "one quad per surfel" test "$faces" -eq "$surfels"
+check "quiet prints nothing" test -z "$("$DSREG" regularize --shape sphere1 --h 0.25 -o "$work/q.off" -q 2>&1)"
+summary=$("$DSREG" regularize --shape sphere1 --h 0.25 -o "$work/q.stl" 2>&1)
+check "summary line names the output" grep -q "q.stl" <<<"$summary"
+"$DSREG" regularize --shape "x^2+y^2+z^2-16" --box 5 --h 0.5 --triangulate -o "$work/tri.obj" -q
+check "triangulated polynomial shape" test "$(grep -c '^f ' "$work/tri.obj")" -gt 0
+check "triangles have 3 vertices" test -z "$(grep '^f ' "$work/tri.obj" | awk 'NF != 4')"
+
+# Errors: message names the culprit, exit code non-zero, no output file.
+expect_error "missing input" "nothing.vol" regularize "$work/nothing.vol" -o "$work/out.obj"
+printf 'X: 4\nY: 4\nZ: 4\nVersion: 2\n.\nabc' >"$work/short.vol"
+expect_error "truncated volume" "short.vol" regularize "$work/short.vol" -o "$work/out.obj"
+expect_error "alpha zero" "alpha" regularize --shape sphere1 --h 0.25 --alpha 0 -o "$work/out.obj"
+expect_error "negative h" "--h" regularize --shape sphere1 --h -1 -o "$work/out.obj"
+expect_error "unknown shape" "blob" regularize --shape blob -o "$work/out.obj"
+expect_error "bad mesh extension" "out.xyz" regularize --shape sphere1 --h 0.25 -o "$work/out.xyz"
+expect_error "missing output folder" "no/such" regularize --shape sphere1 --h 0.25 -o "$work/no/such/out.obj"
+expect_error "no input" "input" regularize -o "$work/out.obj"
+printf 'X: 4\nY: 4\nZ: 4\nVersion: 2\n.\n' >"$work/empty.vol"
+head -c 64 /dev/zero >>"$work/empty.vol"
+expect_error "empty object" "empty" regularize "$work/empty.vol" -o "$work/out.obj"
+
+# A failed run does not touch an existing output.
+echo "precious" >"$work/keep.obj"
+"$DSREG" regularize "$work/short.vol" -o "$work/keep.obj" 2>/dev/null
+check "existing output kept on failure" grep -q precious "$work/keep.obj"
+
+echo "$passes passed, $failures failed"
+[[ $failures -eq 0 ]]
