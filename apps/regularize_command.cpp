@@ -52,11 +52,19 @@ nlohmann::json energy_json(const EnergyTerms& e, const RegularizationWeights& w)
     return {{"data", e.data}, {"alignment", e.alignment}, {"fairness", e.fairness}, {"total", e.total(w)}};
 }
 
+PointMatrix estimate_normals(const std::string& kind, const LoadedVolume& loaded, const DigitalSurface& surface,
+                            double radius) {
+    if (kind == "ii") return integral_invariant_normals(loaded.volume, surface, radius);
+    if (kind == "exact") return exact_normals(*loaded.shape, surface);
+    return trivial_normals(surface);
+}
+
 void check_options(const RegularizeOptions& o) {
     check_mesh_output_path("-o", o.output);
     if (!o.input_mesh.empty()) check_mesh_output_path("--input-mesh", o.input_mesh);
     if (!o.report.empty()) check_output_folder("--report", o.report);
-    if (o.normals != "ii" && o.normals != "trivial") throw Error("--normals " + o.normals + ": choose ii or trivial");
+    if (o.normals == "exact" && o.source.shape.empty())
+        throw Error("--normals exact needs an implicit --shape (the true normals are unknown for a file)");
     if (o.radius && (!(*o.radius > 0) || !std::isfinite(*o.radius))) throw Error("--radius must be positive");
     parse_solver_kind(o.solver);
     RegularizationWeights weights{o.alpha, o.beta, o.gamma, {}, {}};
@@ -81,9 +89,8 @@ void run(const RegularizeOptions& o) {
 
     clock.start("normals");
     const double radius = o.radius ? *o.radius : default_ii_radius(loaded);
-    const PointMatrix normals = o.normals == "ii" ? integral_invariant_normals(loaded.volume, surface, radius)
-                                                  : trivial_normals(surface);
-    clock.finish(o.normals == "ii" ? "integral invariants, r = " + format("%g", radius) : "trivial");
+    const PointMatrix normals = estimate_normals(o.normals, loaded, surface, radius);
+    clock.finish(o.normals == "ii" ? "integral invariants, r = " + format("%g", radius) : o.normals);
 
     clock.start("regularize");
     const RegularizationWeights weights{o.alpha, o.beta, o.gamma, {}, {}};
@@ -155,8 +162,10 @@ void add_regularize_command(CLI::App& app) {
                     "Object connectivity where voxels touch by an edge: 6 keeps them apart, 26 joins them")
         ->check(CLI::IsMember({6, 26}))
         ->capture_default_str();
-    cmd->add_option("--normals", options->normals, "Input normal field: ii (integral invariants) or trivial")
-        ->check(CLI::IsMember({"ii", "trivial"}))
+    cmd->add_option("--normals", options->normals,
+                    "Input normal field: ii (integral invariants), trivial (voxel faces), or exact (true normals of "
+                    "a --shape at the closest point of each face centre)")
+        ->check(CLI::IsMember({"ii", "trivial", "exact"}))
         ->capture_default_str();
     cmd->add_option("--radius", options->radius,
                     "Integral invariant radius, physical units (default: 3 voxels for files, 3·h^(1/3) for --shape)");

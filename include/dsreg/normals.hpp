@@ -5,6 +5,7 @@
 #pragma once
 
 #include "dsreg/digital_surface.hpp"
+#include "dsreg/implicit_shape.hpp"
 #include "dsreg/mesh.hpp"
 #include "dsreg/volume.hpp"
 
@@ -20,5 +21,9 @@ PointMatrix trivial_normals(const DigitalSurface& surface);
 /// cut into voxel rows, each row summed in closed form over its runs of object voxels).
 /// Throws dsreg::Error if radius is not positive and finite.
 PointMatrix integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface, double radius);
+
+/// Ground truth for digitized implicit shapes: the true normal ∇F/|∇F| at the closest point of
+/// {F = 0} to each surfel centre (positions in the shape's physical coordinates).
+PointMatrix exact_normals(const ImplicitShape& shape, const DigitalSurface& surface);
 
 }  // namespace dsreg

@@ -141,4 +141,13 @@ PointMatrix integral_invariant_normals(const BinaryVolume& volume, const Digital
     return u;
 }
 
+PointMatrix exact_normals(const ImplicitShape& shape, const DigitalSurface& surface) {
+    const PointMatrix centers = surfel_centers(surface);
+    PointMatrix u(surface.face_count(), 3);
+#pragma omp parallel for schedule(dynamic, 256)
+    for (std::int64_t f = 0; f < surface.face_count(); ++f)
+        u.row(f) = true_normal(shape, closest_point(shape, centers.row(f).transpose())).transpose();
+    return u;
+}
+
 }  // namespace dsreg
