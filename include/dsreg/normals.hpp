@@ -14,6 +14,13 @@ namespace dsreg {
 /// The axis-aligned normal of each surfel.
 PointMatrix trivial_normals(const DigitalSurface& surface);
 
+/// Convolved trivial normals: for each surfel, the normalized sum of the trivial normals of the
+/// surfels whose centre lies within `radius` (physical units, closed ball) of its centre, itself
+/// included. Where opposite sides of a thin plate cancel out exactly, the trivial normal is kept.
+/// Cost: O(m log m + m·r²/h²) (centres binned into cells of side r). Throws dsreg::Error if
+/// radius is not positive and finite.
+PointMatrix convolved_trivial_normals(const DigitalSurface& surface, double radius);
+
 /// Integral-invariant normals (Pottmann et al.; the paper's ref. [5]): for each surfel centre c,
 /// the covariance matrix of the centres of the object voxels whose centre lies in the ball
 /// B_r(c) (radius in physical units). The normal is the eigenvector of its smallest eigenvalue,

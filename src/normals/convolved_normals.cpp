@@ -1,0 +1,96 @@
+// Convolved trivial normals (see normals.hpp): surfel centres are binned into cubic cells of
+// side ≥ r, so every neighbour within r of a surfel lies in the 3×3×3 block of cells around
+// its own. Cost: O(m log m) for the binning, then O(r²/h²) per surfel on a surface.
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "dsreg/error.hpp"
+#include "dsreg/normals.hpp"
+
+namespace dsreg {
+
+namespace {
+
+using Cell = std::array<std::int64_t, 3>;
+
+/// Surfels sorted by cell; cells[c] holds surfels order[first[c] .. first[c+1]).
+struct CellBins {
+    std::vector<Cell> cells;            ///< occupied cells, sorted
+    std::vector<std::int64_t> first;    ///< size cells.size() + 1
+    std::vector<std::int32_t> order;    ///< surfel indices grouped by cell
+};
+
+CellBins bin_centres(const PointMatrix& centres, double cell_size) {
+    const std::int64_t m = centres.rows();
+    const Eigen::RowVector3d low = centres.colwise().minCoeff();
+    std::vector<Cell> cell(static_cast<std::size_t>(m));
+    for (std::int64_t f = 0; f < m; ++f)
+        for (int d = 0; d < 3; ++d)
+            cell[std::size_t(f)][std::size_t(d)] = std::int64_t(std::floor((centres(f, d) - low[d]) / cell_size));
+    CellBins bins;
+    bins.order.resize(std::size_t(m));
+    std::iota(bins.order.begin(), bins.order.end(), 0);
+    std::stable_sort(bins.order.begin(), bins.order.end(),
+                     [&](std::int32_t a, std::int32_t b) { return cell[std::size_t(a)] < cell[std::size_t(b)]; });
+    for (std::size_t q = 0; q < bins.order.size(); ++q) {
+        const Cell& c = cell[std::size_t(bins.order[q])];
+        if (bins.cells.empty() || bins.cells.back() != c) {
+            bins.cells.push_back(c);
+            bins.first.push_back(std::int64_t(q));
+        }
+    }
+    bins.first.push_back(m);
+    return bins;
+}
+
+/// The occupied cells among the 27 around cells[c].
+std::vector<std::int64_t> neighbour_cells(const CellBins& bins, std::int64_t c) {
+    std::vector<std::int64_t> found;
+    const Cell& centre = bins.cells[std::size_t(c)];
+    for (std::int64_t dx = -1; dx <= 1; ++dx)
+        for (std::int64_t dy = -1; dy <= 1; ++dy)
+            for (std::int64_t dz = -1; dz <= 1; ++dz) {
+                const Cell key{centre[0] + dx, centre[1] + dy, centre[2] + dz};
+                const auto it = std::lower_bound(bins.cells.begin(), bins.cells.end(), key);
+                if (it != bins.cells.end() && *it == key) found.push_back(it - bins.cells.begin());
+            }
+    return found;
+}
+
+}  // namespace
+
+PointMatrix convolved_trivial_normals(const DigitalSurface& surface, double radius) {
+    if (!(radius > 0) || !std::isfinite(radius))
+        throw Error("convolved trivial normals: radius must be positive and finite (got " + std::to_string(radius) + ")");
+    const std::int64_t m = surface.face_count();
+    const PointMatrix centres = surfel_centers(surface);
+    // Distinct surfel centres are at least half a voxel apart, so cells need not be much smaller
+    // than a voxel even for a tiny radius (which keeps the cell coordinates small).
+    const double cell_size = std::max(radius, 0.25 * surface.grid.spacing.minCoeff());
+    const CellBins bins = bin_centres(centres, cell_size);
+    const double r2 = radius * radius;
+    PointMatrix u(m, 3);
+#pragma omp parallel for schedule(dynamic, 16)
+    for (std::int64_t c = 0; c < std::int64_t(bins.cells.size()); ++c) {
+        const std::vector<std::int64_t> around = neighbour_cells(bins, c);
+        for (std::int64_t q = bins.first[std::size_t(c)]; q < bins.first[std::size_t(c) + 1]; ++q) {
+            const std::int32_t f = bins.order[std::size_t(q)];
+            Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
+            for (std::int64_t n : around)
+                for (std::int64_t p = bins.first[std::size_t(n)]; p < bins.first[std::size_t(n) + 1]; ++p) {
+                    const std::int32_t g = bins.order[std::size_t(p)];
+                    if ((centres.row(g) - centres.row(f)).squaredNorm() > r2) continue;
+                    const Surfel& s = surface.surfels[std::size_t(g)];
+                    sum[s.axis] += s.sign;
+                }
+            const double norm = sum.norm();
+            // Opposite sides of a plate thinner than 2r can cancel out: keep the surfel's own normal.
+            u.row(f) = norm > 1e-9 ? Eigen::RowVector3d(sum / norm)
+                                   : Eigen::RowVector3d(surface.surfels[std::size_t(f)].trivial_normal().transpose());
+        }
+    }
+    return u;
+}
+
+}  // namespace dsreg
