@@ -3,13 +3,17 @@
 //
 // Unknowns p̂ (one 3D point per vertex). With u_f the unit normal of face f, the energy is (eq. 1)
 //
-//   E(p̂) = α Σ_i w0_i |p̂_i − p_i|²                                   (data attachment, eq. 3)
-//        + β Σ_f w2_f Σ_{edges (a,b) of f} ((p̂_a − p̂_b)·u_f)²          (alignment, eq. 5–10)
-//        + γ Σ_i w0_i |p̂_i − mean_{j ∈ link(i)} p̂_j|²                   (fairness, eq. 11–14)
+//   E(p̂) = α Σ_i α_i w0_i |p̂_i − p_i|²                                (data attachment, eq. 3)
+//        + β Σ_f β_f w2_f Σ_{edges (a,b) of f} ((p̂_a − p̂_b)·u_f)²       (alignment, eq. 5–10)
+//        + γ Σ_i γ_i w0_i |p̂_i − mean_{j ∈ link(i)} p̂_j|²                (fairness, eq. 11–14)
 //
-// and its minimizer solves R p* = α W0 p (eq. 22–23). Vectors of unknowns are interleaved:
-// entry 3i + d is coordinate d of vertex i, so R is made of 3×3 blocks. All positions are in
-// physical units; α, β, γ are dimensionless weights (the terms all scale as length²).
+// and its minimizer solves R p* = α W0_α p (eq. 22–23, with W0_α = diag(α_i w0_i)). w0_i, w2_f
+// are the metrics W0, W2 of §3.4 (identity by default; area metrics in
+// regularization_metrics.hpp); α_i, β_f, γ_i are optional local multipliers of the three global
+// weights (beyond the paper; 1 by default). Vectors of unknowns are interleaved: entry 3i + d is
+// coordinate d of vertex i, so R is made of 3×3 blocks. All positions are in physical units;
+// α, β, γ and the multipliers are dimensionless, so the energy has the units of length² × the
+// units of the metric (length² with identity metrics, length⁴ with area metrics).
 #pragma once
 
 #include <Eigen/Core>
@@ -26,19 +30,26 @@ struct RegularizationWeights {
     double alpha = 1e-3;  ///< data attachment
     double beta = 1.0;    ///< normal alignment
     double gamma = 1e-2;  ///< fairness
-    Eigen::VectorXd vertex_weights;  ///< diagonal of W0 (one per vertex), empty = identity
-    Eigen::VectorXd face_weights;    ///< diagonal of W2 (one per face), empty = identity
+    Eigen::VectorXd vertex_weights;  ///< diagonal of W0 (one per vertex, > 0), empty = identity
+    Eigen::VectorXd face_weights;    ///< diagonal of W2 (one per face, > 0), empty = identity
+    // Local multipliers (beyond the paper; empty = 1 everywhere). Added last, with default
+    // member initializers, so that aggregate initialization {α, β, γ, W0, W2} stays valid and
+    // warning-free.
+    Eigen::VectorXd vertex_alpha{};  ///< α_i of the data term, one per vertex, each > 0
+    Eigen::VectorXd face_beta{};     ///< β_f of the alignment term, one per face, each ≥ 0
+    Eigen::VectorXd vertex_gamma{};  ///< γ_i of the fairness term, one per vertex, each ≥ 0
 };
 
 /// The sparse quadratic problem R x = b, with R symmetric positive definite (3n×3n, both
-/// triangles stored) and b = α W0 p.
+/// triangles stored) and b = α W0_α p (W0_α = diag(α_i w0_i)).
 struct RegularizationSystem {
     Eigen::SparseMatrix<double> matrix;
     Eigen::VectorXd rhs;
     double constant = 0;  ///< α pᵀ W0 p, so that E(x) = xᵀ R x − 2 bᵀ x + constant
 };
 
-/// The three unweighted sums of eq. (1) at positions p̂ (α, β, γ not applied; W0, W2 applied).
+/// The three sums of eq. (1) at positions p̂ without the global α, β, γ (W0, W2 and the local
+/// multipliers α_i, β_f, γ_i applied): data = Σ α_i w0_i |p̂_i − p_i|², and so on.
 struct EnergyTerms {
     double data = 0;
     double alignment = 0;
@@ -46,8 +57,9 @@ struct EnergyTerms {
     double total(const RegularizationWeights& w) const { return w.alpha * data + w.beta * alignment + w.gamma * fairness; }
 };
 
-/// Checks the weights (α > 0, β ≥ 0, γ ≥ 0, finite; per-element weights positive and of the
-/// right size). Throws dsreg::Error naming the offending parameter.
+/// Checks the weights: α > 0, β ≥ 0, γ ≥ 0, all finite; W0, W2 and α_i positive, β_f and γ_i
+/// non-negative, each finite and of the right size (or empty). Throws dsreg::Error naming the
+/// offending parameter (and element).
 void validate_weights(const RegularizationWeights& weights, std::int64_t vertex_count, std::int64_t face_count);
 
 /// Assembles R and b of eq. (22–23) for the quad mesh (vertices p, faces, links) and the field u.

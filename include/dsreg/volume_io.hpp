@@ -3,6 +3,8 @@
 // Readers decode the voxel values and keep those inside a ValueRange as the object, so a volume
 // costs one byte per voxel in memory whatever its value type: values are thresholded as they are
 // decoded (after conversion to double, so 64-bit values above 2^53 are compared rounded).
+// read_volume_values keeps the values instead (as float, 4 bytes per voxel), through the same
+// header parsing, size checks and decoders; e.g. for per-vertex weight maps.
 // Every reader checks the header against the real size of the file before allocating: a stored
 // payload must fill the rest of the file exactly; a zlib payload must be large enough to inflate
 // to the announced size (zlib cannot exceed 1032:1) and is inflated with a hard cap at that size.
@@ -17,6 +19,18 @@
 #include "dsreg/volume.hpp"
 
 namespace dsreg {
+
+/// A grey-level volume: one value per voxel, x fastest (linear index = grid.linear_index).
+/// Values are stored as float: integers up to 2^24 are exact, larger ones are rounded to 24
+/// significant bits, float64 values to float precision.
+struct ScalarVolume {
+    VoxelGrid grid;
+    std::vector<float> values;
+
+    float value(std::int64_t i, std::int64_t j, std::int64_t k) const {
+        return values[static_cast<std::size_t>(grid.linear_index(i, j, k))];
+    }
+};
 
 /// Scalar type of the voxels of a headerless raw volume.
 enum class RawVoxelType { UInt8, Int8, UInt16, Int16, UInt32, Int32, UInt64, Int64, Float32, Float64 };
@@ -62,6 +76,11 @@ BinaryVolume read_raw(const std::string& path, const RawVolumeLayout& layout, co
 /// Any other extension throws dsreg::Error.
 BinaryVolume read_volume(const std::string& path, const ValueRange& range = {}, const RawVolumeLayout* raw_layout = nullptr,
                          const VolumeLimits& limits = {});
+
+/// The voxel values of a volume file, any format read_volume accepts (same extension rules,
+/// same checks, same errors), without thresholding. PGM values are checked against maxval.
+ScalarVolume read_volume_values(const std::string& path, const RawVolumeLayout* raw_layout = nullptr,
+                                const VolumeLimits& limits = {});
 
 /// Writers (atomic: a temporary file renamed into place). `values` holds one value per voxel of
 /// `dims`, x fastest. Used by tests, fuzz seeds and users converting volumes. They throw

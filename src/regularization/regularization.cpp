@@ -14,21 +14,36 @@ namespace {
 
 using ScalarRowMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
 
-double vertex_weight(const RegularizationWeights& w, std::int64_t i) {
-    return w.vertex_weights.size() ? w.vertex_weights[i] : 1.0;
-}
-double face_weight(const RegularizationWeights& w, std::int64_t f) {
-    return w.face_weights.size() ? w.face_weights[f] : 1.0;
+/// An optional per-element factor: 1 where the vector is empty.
+double element_or_one(const Eigen::VectorXd& values, std::int64_t index) {
+    return values.size() ? values[index] : 1.0;
 }
 
-void check_per_element(const Eigen::VectorXd& values, std::int64_t expected, const std::string& name) {
+/// α_i w0_i: the weight of vertex i in the data term (eq. 3 with W0 and the local α).
+double data_weight(const RegularizationWeights& w, std::int64_t i) {
+    return element_or_one(w.vertex_alpha, i) * element_or_one(w.vertex_weights, i);
+}
+/// γ_i w0_i: the weight of vertex i in the fairness term (eq. 11).
+double fairness_weight(const RegularizationWeights& w, std::int64_t i) {
+    return element_or_one(w.vertex_gamma, i) * element_or_one(w.vertex_weights, i);
+}
+/// β_f w2_f: the weight of face f in the alignment term (eq. 9).
+double alignment_weight(const RegularizationWeights& w, std::int64_t f) {
+    return element_or_one(w.face_beta, f) * element_or_one(w.face_weights, f);
+}
+
+enum class Sign { Positive, NonNegative };
+
+void check_per_element(const Eigen::VectorXd& values, std::int64_t expected, const std::string& name, Sign sign) {
     if (values.size() == 0) return;
     if (values.size() != expected)
         throw Error(name + ": " + std::to_string(values.size()) + " values given, " + std::to_string(expected) + " expected");
-    for (Eigen::Index i = 0; i < values.size(); ++i)
-        if (!(values[i] > 0) || !std::isfinite(values[i]))
-            throw Error(name + ": value " + std::to_string(values[i]) + " at index " + std::to_string(i) +
-                        " is not a positive finite number");
+    for (Eigen::Index i = 0; i < values.size(); ++i) {
+        const bool ok = std::isfinite(values[i]) && (sign == Sign::Positive ? values[i] > 0 : values[i] >= 0);
+        if (!ok)
+            throw Error(name + ": value " + std::to_string(values[i]) + " at index " + std::to_string(i) + " is not a " +
+                        (sign == Sign::Positive ? "positive" : "non-negative") + " finite number");
+    }
 }
 
 /// I − B of eq. (13–14): row i has 1 on the diagonal and −1/|link(i)| on each link entry.
@@ -48,20 +63,21 @@ ScalarRowMatrix fairness_operator(const VertexLinks& links) {
     return op;
 }
 
-/// The part of R that acts on each coordinate separately (α W0 + γ (I−B)ᵀ W0 (I−B)), with
-/// explicit zeros added on every mesh edge so that the alignment blocks have a place.
+/// The part of R that acts on each coordinate separately (α W0_α + γ (I−B)ᵀ W0_γ (I−B), with
+/// W0_α = diag(α_i w0_i), W0_γ = diag(γ_i w0_i)), with explicit zeros added on every mesh edge
+/// so that the alignment blocks have a place.
 ScalarRowMatrix coordinate_wise_part(const VertexLinks& links, const RegularizationWeights& w, std::int64_t n) {
-    Eigen::VectorXd w0 = Eigen::VectorXd::Ones(n);
-    for (std::int64_t i = 0; i < n; ++i) w0[i] = vertex_weight(w, i);
     ScalarRowMatrix part(n, n);
     if (w.gamma > 0) {
+        Eigen::VectorXd w0_gamma(n);
+        for (std::int64_t i = 0; i < n; ++i) w0_gamma[i] = fairness_weight(w, i);
         const ScalarRowMatrix fair = fairness_operator(links);
-        part = w.gamma * (ScalarRowMatrix(fair.transpose()) * w0.asDiagonal() * fair);
+        part = w.gamma * (ScalarRowMatrix(fair.transpose()) * w0_gamma.asDiagonal() * fair);
     }
     std::vector<Eigen::Triplet<double>> structure;
     structure.reserve(links.neighbors.size() + std::size_t(n));
     for (std::int64_t i = 0; i < n; ++i) {
-        structure.emplace_back(i, i, w.alpha * w0[i]);
+        structure.emplace_back(i, i, w.alpha * data_weight(w, i));
         for (std::int64_t q = links.offsets[std::size_t(i)]; q < links.offsets[std::size_t(i + 1)]; ++q)
             structure.emplace_back(i, links.neighbors[std::size_t(q)], 0.0);
     }
@@ -79,7 +95,7 @@ std::int64_t slot_of(const ScalarRowMatrix& m, std::int64_t row, std::int64_t co
     return it - m.innerIndexPtr();
 }
 
-/// 3×3 alignment blocks β w2_f u_f u_fᵀ (eq. 20) accumulated on the pattern of `pattern`:
+/// 3×3 alignment blocks β β_f w2_f u_f u_fᵀ (eq. 20) accumulated on the pattern of `pattern`:
 /// for each edge (a,b) of face f, +M on blocks (a,a), (b,b) and −M on (a,b), (b,a).
 std::vector<Eigen::Matrix3d> alignment_blocks(const ScalarRowMatrix& pattern, const FaceMatrix& quads,
                                               const PointMatrix& normals, const RegularizationWeights& w) {
@@ -88,7 +104,9 @@ std::vector<Eigen::Matrix3d> alignment_blocks(const ScalarRowMatrix& pattern, co
     const Eigen::Index k = quads.cols();
     for (Eigen::Index f = 0; f < quads.rows(); ++f) {
         const Eigen::Vector3d u = normals.row(f).transpose();
-        const Eigen::Matrix3d m = w.beta * face_weight(w, f) * (u * u.transpose());
+        const double weight = w.beta * alignment_weight(w, f);
+        if (weight == 0) continue;
+        const Eigen::Matrix3d m = weight * (u * u.transpose());
         for (Eigen::Index e = 0; e < k; ++e) {
             const std::int64_t a = quads(f, e), b = quads(f, (e + 1) % k);
             blocks[std::size_t(slot_of(pattern, a, a))] += m;
@@ -148,8 +166,11 @@ void validate_weights(const RegularizationWeights& w, std::int64_t vertex_count,
                     "): the data term keeps the system positive definite");
     if (!(w.beta >= 0) || !std::isfinite(w.beta)) throw Error("beta must be a non-negative finite number (got " + std::to_string(w.beta) + ")");
     if (!(w.gamma >= 0) || !std::isfinite(w.gamma)) throw Error("gamma must be a non-negative finite number (got " + std::to_string(w.gamma) + ")");
-    check_per_element(w.vertex_weights, vertex_count, "vertex weights (W0)");
-    check_per_element(w.face_weights, face_count, "face weights (W2)");
+    check_per_element(w.vertex_weights, vertex_count, "vertex weights (W0)", Sign::Positive);
+    check_per_element(w.face_weights, face_count, "face weights (W2)", Sign::Positive);
+    check_per_element(w.vertex_alpha, vertex_count, "per-vertex alpha multipliers", Sign::Positive);
+    check_per_element(w.face_beta, face_count, "per-face beta multipliers", Sign::NonNegative);
+    check_per_element(w.vertex_gamma, vertex_count, "per-vertex gamma multipliers", Sign::NonNegative);
 }
 
 RegularizationSystem assemble_regularization_system(const PointMatrix& positions, const FaceMatrix& quads,
@@ -167,7 +188,7 @@ RegularizationSystem assemble_regularization_system(const PointMatrix& positions
     system.rhs.resize(3 * n);
     system.constant = 0;
     for (std::int64_t i = 0; i < n; ++i) {
-        const double aw = weights.alpha * vertex_weight(weights, i);
+        const double aw = weights.alpha * data_weight(weights, i);
         for (int d = 0; d < 3; ++d) system.rhs[3 * i + d] = aw * positions(i, d);
         system.constant += aw * positions.row(i).squaredNorm();
     }
@@ -176,17 +197,17 @@ RegularizationSystem assemble_regularization_system(const PointMatrix& positions
 
 EnergyTerms regularization_energy(const PointMatrix& candidate, const PointMatrix& positions, const FaceMatrix& quads,
                                   const VertexLinks& links, const PointMatrix& normals, const RegularizationWeights& weights) {
-    EnergyTerms terms;
     const std::int64_t n = positions.rows();
+    validate_weights(weights, n, quads.rows());
+    EnergyTerms terms;
     for (std::int64_t i = 0; i < n; ++i) {
-        const double w0 = vertex_weight(weights, i);
-        terms.data += w0 * (candidate.row(i) - positions.row(i)).squaredNorm();
+        terms.data += data_weight(weights, i) * (candidate.row(i) - positions.row(i)).squaredNorm();
         Eigen::RowVector3d barycenter = Eigen::RowVector3d::Zero();
         for (std::int64_t q = links.offsets[std::size_t(i)]; q < links.offsets[std::size_t(i + 1)]; ++q)
             barycenter += candidate.row(links.neighbors[std::size_t(q)]);
         if (links.size(i) > 0) barycenter /= double(links.size(i));
         else barycenter = candidate.row(i);
-        terms.fairness += w0 * (candidate.row(i) - barycenter).squaredNorm();
+        terms.fairness += fairness_weight(weights, i) * (candidate.row(i) - barycenter).squaredNorm();
     }
     const Eigen::Index k = quads.cols();
     for (Eigen::Index f = 0; f < quads.rows(); ++f) {
@@ -195,7 +216,7 @@ EnergyTerms regularization_energy(const PointMatrix& candidate, const PointMatri
             const double d = (candidate.row(quads(f, e)) - candidate.row(quads(f, (e + 1) % k))).dot(normals.row(f));
             sum += d * d;
         }
-        terms.alignment += face_weight(weights, f) * sum;
+        terms.alignment += alignment_weight(weights, f) * sum;
     }
     return terms;
 }

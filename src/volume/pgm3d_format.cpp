@@ -107,14 +107,14 @@ bool read_ascii_value(InputFile& file, std::int64_t index, int maxval, int& valu
     return true;
 }
 
-void decode_ascii_values(InputFile& file, const Pgm3dHeader& header, const std::string& description, const ValueRange& range,
-                         std::vector<std::uint8_t>& mask) {
-    const auto voxels = static_cast<std::int64_t>(mask.size());
+void decode_ascii_values(InputFile& file, const Pgm3dHeader& header, const std::string& description,
+                         VoxelDestination& destination) {
+    const auto voxels = static_cast<std::int64_t>(destination.size());
     for (std::int64_t index = 0; index < voxels; ++index) {
         int value = 0;
         if (!read_ascii_value(file, index, header.maxval, value))
             file.fail("truncated ASCII data: " + description + ", the file holds only " + std::to_string(index) + " values");
-        mask[static_cast<std::size_t>(index)] = range.contains(value) ? 1 : 0;
+        destination.set(static_cast<std::uint64_t>(index), value);
     }
     skip_spaces(file);
     if (file.peek() != -1) file.fail("trailing data after the " + std::to_string(voxels) + " values: " + quote_excerpt(read_token_here(file)));
@@ -128,17 +128,16 @@ void require_plausible_ascii_payload(const InputFile& file, std::int64_t voxels,
                   " bytes after the header can hold at most " + std::to_string(max_values) + " values");
 }
 
-BinaryVolume decode_binary_values(InputFile& file, const Pgm3dHeader& header, std::int64_t voxels, const std::string& path,
-                                  const ValueRange& range) {
+void decode_binary_values(InputFile& file, const Pgm3dHeader& header, std::int64_t voxels, const std::string& path,
+                          VoxelDestination& destination) {
     if (!is_pgm_space(file.get())) file.fail("expected a single whitespace character between maxval and the binary data");
     const SampleFormat sample{header.maxval < 256 ? 1 : 2, SampleKind::Unsigned, true};
     const std::uint64_t expected = payload_bytes(path, voxels, sample.bytes);
     require_exact_payload(file, expected, "header says " + describe_payload(header.dims, voxels, sample.bytes));
-    BinaryVolume volume = make_empty_volume(path, header.dims);
-    MaskWriter sink(path, sample, range, volume.mask);
+    destination.allocate(path, header.dims);
+    SampleWriter sink = destination.writer(path, sample);
     sink.reject_values_above(header.maxval, "maxval");
     decode_stored_payload(file, sink);
-    return volume;
 }
 
 void write_binary_values(std::ostream& out, const std::vector<std::uint16_t>& values, bool two_bytes) {
@@ -165,17 +164,26 @@ void write_ascii_values(std::ostream& out, const std::vector<std::uint16_t>& val
 
 }  // namespace
 
-BinaryVolume read_pgm3d(const std::string& path, const ValueRange& range, const VolumeLimits& limits) {
+namespace volume_io_detail {
+
+void read_pgm3d_voxels(const std::string& path, const VolumeLimits& limits, VoxelDestination& destination) {
     InputFile file(path);
     const Pgm3dHeader header = read_pgm3d_header(file);
     const std::int64_t voxels = checked_voxel_count(path, header.dims, limits);
-    if (header.binary) return decode_binary_values(file, header, voxels, path, range);
+    if (header.binary) return decode_binary_values(file, header, voxels, path, destination);
 
     const std::string description = "header says " + describe_payload(header.dims, voxels, 1);
     require_plausible_ascii_payload(file, voxels, description);
-    BinaryVolume volume = make_empty_volume(path, header.dims);
-    decode_ascii_values(file, header, description, range, volume.mask);
-    return volume;
+    destination.allocate(path, header.dims);
+    decode_ascii_values(file, header, description, destination);
+}
+
+}  // namespace volume_io_detail
+
+BinaryVolume read_pgm3d(const std::string& path, const ValueRange& range, const VolumeLimits& limits) {
+    auto destination = VoxelDestination::mask(range);
+    read_pgm3d_voxels(path, limits, destination);
+    return destination.take_mask();
 }
 
 void write_pgm3d(const std::string& path, const Index3& dims, const std::vector<std::uint16_t>& values, bool binary) {

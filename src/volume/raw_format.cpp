@@ -55,7 +55,10 @@ RawVoxelType parse_raw_voxel_type(const std::string& name) {
                 " (expected uint8, int8, uint16, int16, uint32, int32, uint64, int64, float32 or float64)");
 }
 
-BinaryVolume read_raw(const std::string& path, const RawVolumeLayout& layout, const ValueRange& range, const VolumeLimits& limits) {
+namespace volume_io_detail {
+
+void read_raw_voxels(const std::string& path, const RawVolumeLayout& layout, const VolumeLimits& limits,
+                     VoxelDestination& destination) {
     InputFile file(path);
     const SampleFormat sample = sample_format(layout);
     const std::int64_t voxels = checked_voxel_count(path, layout.dims, limits);
@@ -65,10 +68,17 @@ BinaryVolume read_raw(const std::string& path, const RawVolumeLayout& layout, co
     if (layout.header_bytes > 0) description += " after " + std::to_string(layout.header_bytes) + " header bytes";
     require_exact_payload(file, expected, description);
 
-    BinaryVolume volume = make_empty_volume(path, layout.dims);
-    MaskWriter sink(path, sample, range, volume.mask);
+    destination.allocate(path, layout.dims);
+    SampleWriter sink = destination.writer(path, sample);
     decode_stored_payload(file, sink);
-    return volume;
+}
+
+}  // namespace volume_io_detail
+
+BinaryVolume read_raw(const std::string& path, const RawVolumeLayout& layout, const ValueRange& range, const VolumeLimits& limits) {
+    auto destination = VoxelDestination::mask(range);
+    read_raw_voxels(path, layout, limits, destination);
+    return destination.take_mask();
 }
 
 }  // namespace dsreg

@@ -103,8 +103,8 @@ void require_byte_voxels(const InputFile& file, const HeaderFields& fields) {
         file.fail("unsupported Voxel-Size " + quote_excerpt(found->second) + " (a .vol voxel is 1 byte)");
 }
 
-BinaryVolume decode_dgtal_payload(InputFile& file, const DgtalHeader& header, SampleFormat sample, const ValueRange& range,
-                                  const VolumeLimits& limits) {
+void decode_dgtal_payload(InputFile& file, const DgtalHeader& header, SampleFormat sample, const VolumeLimits& limits,
+                          VoxelDestination& destination) {
     const std::int64_t voxels = checked_voxel_count(file.path(), header.dims, limits);
     const std::uint64_t expected = payload_bytes(file.path(), voxels, sample.bytes);
     const std::string description = "header says " + describe_payload(header.dims, voxels, sample.bytes);
@@ -113,13 +113,12 @@ BinaryVolume decode_dgtal_payload(InputFile& file, const DgtalHeader& header, Sa
     else
         require_plausible_zlib_payload(file, expected, description);
 
-    BinaryVolume volume = make_empty_volume(file.path(), header.dims);
-    MaskWriter sink(file.path(), sample, range, volume.mask);
+    destination.allocate(file.path(), header.dims);
+    SampleWriter sink = destination.writer(file.path(), sample);
     if (header.version == 2)
         decode_stored_payload(file, sink);
     else
         decode_zlib_payload(file, expected, sink, description);
-    return volume;
 }
 
 /// The header DGtal's writers produce (all the keys its readers require), without Center-*
@@ -144,18 +143,34 @@ void check_version(const std::string& path, int version) {
 
 }  // namespace
 
-BinaryVolume read_vol(const std::string& path, const ValueRange& range, const VolumeLimits& limits) {
+namespace volume_io_detail {
+
+void read_vol_voxels(const std::string& path, const VolumeLimits& limits, VoxelDestination& destination) {
     InputFile file(path);
     const DgtalHeader header = read_dgtal_header(file);
     require_byte_voxels(file, header.fields);
-    return decode_dgtal_payload(file, header, kVolSample, range, limits);
+    decode_dgtal_payload(file, header, kVolSample, limits, destination);
 }
 
-BinaryVolume read_longvol(const std::string& path, const ValueRange& range, const VolumeLimits& limits) {
+void read_longvol_voxels(const std::string& path, const VolumeLimits& limits, VoxelDestination& destination) {
     // Lvoxel-Size is not checked: DGtal writes "Lvoxel-Size: 4" for its 8-byte values.
     InputFile file(path);
     const DgtalHeader header = read_dgtal_header(file);
-    return decode_dgtal_payload(file, header, kLongvolSample, range, limits);
+    decode_dgtal_payload(file, header, kLongvolSample, limits, destination);
+}
+
+}  // namespace volume_io_detail
+
+BinaryVolume read_vol(const std::string& path, const ValueRange& range, const VolumeLimits& limits) {
+    auto destination = VoxelDestination::mask(range);
+    read_vol_voxels(path, limits, destination);
+    return destination.take_mask();
+}
+
+BinaryVolume read_longvol(const std::string& path, const ValueRange& range, const VolumeLimits& limits) {
+    auto destination = VoxelDestination::mask(range);
+    read_longvol_voxels(path, limits, destination);
+    return destination.take_mask();
 }
 
 void write_vol(const std::string& path, const Index3& dims, const std::vector<std::uint8_t>& values, int version) {

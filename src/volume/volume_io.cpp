@@ -1,5 +1,5 @@
 // dsreg — volume I/O: format dispatch and the machinery shared by every reader (file access,
-// dimension checks, payload size checks, thresholding decoder). The formats themselves live in
+// dimension checks, payload size checks, the decoder into a mask or into values). The formats themselves live in
 // vol_format.cpp, pgm3d_format.cpp and raw_format.cpp; zlib streams in zlib_payload.cpp.
 #include "dsreg/volume_io.hpp"
 
@@ -10,6 +10,7 @@
 #include <limits>
 #include <new>
 #include <sstream>
+#include <utility>
 
 #include "dsreg/atomic_file.hpp"
 #include "dsreg/error.hpp"
@@ -111,16 +112,44 @@ std::int64_t checked_voxel_count(const std::string& path, const Index3& dims, co
     return slice * dims[2];
 }
 
-BinaryVolume make_empty_volume(const std::string& path, const Index3& dims) {
-    BinaryVolume volume;
-    volume.grid.dims = dims;
-    volume.grid.spacing = Eigen::Vector3d(1.0, 1.0, 1.0);
-    volume.grid.origin = Eigen::Vector3d(0.0, 0.0, 0.0);
+// ----------------------------------------------------------------------------------------------
+// VoxelDestination
+
+VoxelDestination VoxelDestination::mask(const ValueRange& range) { return VoxelDestination(false, range); }
+
+VoxelDestination VoxelDestination::values() { return VoxelDestination(true, ValueRange{}); }
+
+void VoxelDestination::allocate(const std::string& path, const Index3& dims) {
+    grid_ = VoxelGrid{};
+    grid_.dims = dims;
+    const auto count = static_cast<std::size_t>(grid_.voxel_count());
     try {
-        volume.mask.assign(static_cast<std::size_t>(volume.grid.voxel_count()), 0);
+        if (keep_values_)
+            values_.assign(count, 0.0f);
+        else
+            mask_.assign(count, 0);
     } catch (const std::bad_alloc&) {
-        fail(path, "not enough memory for a " + format_dims(dims) + " mask (" + std::to_string(volume.grid.voxel_count()) + " bytes)");
+        const std::string bytes = std::to_string(grid_.voxel_count() * (keep_values_ ? 4 : 1));
+        fail(path, "not enough memory for a " + format_dims(dims) + (keep_values_ ? " volume of values (" : " mask (") + bytes +
+                       " bytes)");
     }
+}
+
+SampleWriter VoxelDestination::writer(const std::string& path, SampleFormat format) {
+    return keep_values_ ? SampleWriter(path, format, values_) : SampleWriter(path, format, range_, mask_);
+}
+
+BinaryVolume VoxelDestination::take_mask() {
+    BinaryVolume volume;
+    volume.grid = grid_;
+    volume.mask = std::move(mask_);
+    return volume;
+}
+
+ScalarVolume VoxelDestination::take_values() {
+    ScalarVolume volume;
+    volume.grid = grid_;
+    volume.values = std::move(values_);
     return volume;
 }
 
@@ -171,39 +200,54 @@ void InputFile::skip(std::uint64_t count) {
 }
 
 // ----------------------------------------------------------------------------------------------
-// MaskWriter
+// SampleWriter
 
-MaskWriter::MaskWriter(const std::string& path, SampleFormat format, const ValueRange& range, std::vector<std::uint8_t>& mask)
-    : path_(path), format_(format), range_(range), mask_(mask) {
+SampleWriter::SampleWriter(const std::string& path, SampleFormat format, std::uint64_t size)
+    : path_(path), format_(format), size_(size) {
     if (format_.bytes == 1) {
         use_byte_table_ = true;
         for (int byte = 0; byte < 256; ++byte) {
             const auto encoded = static_cast<std::uint8_t>(byte);
-            byte_table_[byte] = range_.contains(decode_sample(&encoded, format_)) ? 1 : 0;
+            byte_table_[byte] = decode_sample(&encoded, format_);
         }
     }
 }
 
-void MaskWriter::reject_values_above(double max_value, const std::string& limit_name) {
+SampleWriter::SampleWriter(const std::string& path, SampleFormat format, const ValueRange& range, std::vector<std::uint8_t>& mask)
+    : SampleWriter(path, format, mask.size()) {
+    range_ = range;
+    mask_ = mask.data();
+    for (int byte = 0; byte < 256; ++byte) mask_table_[byte] = range_.contains(byte_table_[byte]) ? 1 : 0;
+}
+
+SampleWriter::SampleWriter(const std::string& path, SampleFormat format, std::vector<float>& values)
+    : SampleWriter(path, format, values.size()) {
+    values_ = values.data();
+}
+
+void SampleWriter::reject_values_above(double max_value, const std::string& limit_name) {
     has_max_ = true;
     max_value_ = max_value;
     max_name_ = limit_name;
 }
 
-void MaskWriter::emit(const std::uint8_t* sample) {
-    if (written_ >= mask_.size()) fail(path_, "payload holds more values than the " + std::to_string(mask_.size()) + " voxels announced");
-    if (use_byte_table_ && !has_max_) {
-        mask_[written_++] = byte_table_[*sample];
+void SampleWriter::emit(const std::uint8_t* sample) {
+    if (written_ >= size_) fail(path_, "payload holds more values than the " + std::to_string(size_) + " voxels announced");
+    if (use_byte_table_ && mask_ != nullptr && !has_max_) {  // the common case of .vol files: one lookup
+        mask_[written_++] = mask_table_[*sample];
         return;
     }
-    const double value = decode_sample(sample, format_);
+    const double value = use_byte_table_ ? byte_table_[*sample] : decode_sample(sample, format_);
     if (has_max_ && value > max_value_)
         fail(path_, "value " + format_value(value) + " of voxel #" + std::to_string(written_) + " exceeds " + max_name_ + " " +
                         format_value(max_value_));
-    mask_[written_++] = range_.contains(value) ? 1 : 0;
+    if (mask_ != nullptr)
+        mask_[written_++] = range_.contains(value) ? 1 : 0;
+    else
+        values_[written_++] = static_cast<float>(value);
 }
 
-void MaskWriter::consume(const std::uint8_t* data, std::size_t count) {
+void SampleWriter::consume(const std::uint8_t* data, std::size_t count) {
     const auto width = static_cast<std::size_t>(format_.bytes);
     // Complete a sample left over from the previous chunk.
     if (pending_size_ > 0) {
@@ -247,7 +291,7 @@ void require_exact_payload(const InputFile& file, std::uint64_t expected_bytes, 
         file.fail(std::to_string(available - expected_bytes) + " trailing bytes after the payload: " + description + ", " + holds);
 }
 
-void decode_stored_payload(InputFile& file, MaskWriter& sink) {
+void decode_stored_payload(InputFile& file, SampleWriter& sink) {
     std::vector<std::uint8_t> chunk(std::size_t(1) << 20);
     while (!sink.complete()) {
         const std::size_t got = file.read(chunk.data(), chunk.size());
@@ -273,20 +317,36 @@ void check_writer_input(const std::string& path, const Index3& dims, std::size_t
 // ----------------------------------------------------------------------------------------------
 // Dispatch on the file extension
 
-BinaryVolume read_volume(const std::string& path, const ValueRange& range, const RawVolumeLayout* raw_layout,
-                         const VolumeLimits& limits) {
+namespace volume_io_detail {
+
+void read_volume_voxels(const std::string& path, const RawVolumeLayout* raw_layout, const VolumeLimits& limits,
+                        VoxelDestination& destination) {
     const std::string extension = file_extension(path);
-    if (extension == "vol") return read_vol(path, range, limits);
-    if (extension == "longvol" || extension == "lvol") return read_longvol(path, range, limits);
-    if (extension == "pgm3d" || extension == "p3d") return read_pgm3d(path, range, limits);
+    if (extension == "vol") return read_vol_voxels(path, limits, destination);
+    if (extension == "longvol" || extension == "lvol") return read_longvol_voxels(path, limits, destination);
+    if (extension == "pgm3d" || extension == "p3d") return read_pgm3d_voxels(path, limits, destination);
     if (extension == "raw") {
         if (raw_layout == nullptr)
-            volume_io_detail::fail(path, "a .raw volume has no header: its layout (dimensions, voxel type, byte order) must be given");
-        return read_raw(path, *raw_layout, range, limits);
+            fail(path, "a .raw volume has no header: its layout (dimensions, voxel type, byte order) must be given");
+        return read_raw_voxels(path, *raw_layout, limits, destination);
     }
     const std::string shown = extension.empty() ? "no extension" : "unknown extension '." + extension + "'";
-    volume_io_detail::fail(path, "cannot tell the volume format: " + shown +
-                                     " (expected .vol, .longvol, .lvol, .pgm3d, .p3d or .raw)");
+    fail(path, "cannot tell the volume format: " + shown + " (expected .vol, .longvol, .lvol, .pgm3d, .p3d or .raw)");
+}
+
+}  // namespace volume_io_detail
+
+BinaryVolume read_volume(const std::string& path, const ValueRange& range, const RawVolumeLayout* raw_layout,
+                         const VolumeLimits& limits) {
+    auto destination = volume_io_detail::VoxelDestination::mask(range);
+    volume_io_detail::read_volume_voxels(path, raw_layout, limits, destination);
+    return destination.take_mask();
+}
+
+ScalarVolume read_volume_values(const std::string& path, const RawVolumeLayout* raw_layout, const VolumeLimits& limits) {
+    auto destination = volume_io_detail::VoxelDestination::values();
+    volume_io_detail::read_volume_voxels(path, raw_layout, limits, destination);
+    return destination.take_values();
 }
 
 }  // namespace dsreg

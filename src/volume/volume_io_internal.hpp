@@ -5,8 +5,11 @@
 //   2. validate the dimensions (checked_voxel_count) and check the payload size against the
 //      real file size (require_exact_payload / require_plausible_zlib_payload) — all before
 //      allocating anything proportional to the header's claims;
-//   3. allocate the mask (make_empty_volume) and decode the payload through a MaskWriter, which
-//      thresholds each value as soon as it is decoded, so no full-precision copy is ever kept.
+//   3. allocate the destination (VoxelDestination: a mask, or float values) and decode the
+//      payload through a SampleWriter, which hands each value to the destination as soon as it
+//      is decoded: a mask thresholds it at once, so no full-precision copy is ever kept.
+// The format readers (read_*_voxels) are written once against VoxelDestination; the public
+// read_* functions (masks) and read_volume_values (values) only choose the destination.
 #pragma once
 
 #include <cstddef>
@@ -40,9 +43,6 @@ bool parse_positive_integer(const std::string& text, std::int64_t& value);
 /// product is at most limits.max_voxels.
 std::int64_t checked_voxel_count(const std::string& path, const Index3& dims, const VolumeLimits& limits);
 
-/// A volume with `dims`, spacing 1, origin 0 and an all-background mask. Throws dsreg::Error
-/// naming `path` if the mask cannot be allocated.
-BinaryVolume make_empty_volume(const std::string& path, const Index3& dims);
 
 /// A regular file opened for reading, with its size known up front and the read position tracked.
 class InputFile {
@@ -77,12 +77,16 @@ struct SampleFormat {
     bool big_endian = false;
 };
 
-/// Decodes a stream of encoded samples, in voxel order, into mask bytes (1 = value in range).
-/// Bytes may arrive in chunks of any size: a sample split between chunks is completed by the
-/// next call. Optionally rejects values above a maximum (PGM's maxval).
-class MaskWriter {
+/// Decodes a stream of encoded samples, in voxel order, into either mask bytes (1 = value in
+/// `range`) or float values. Bytes may arrive in chunks of any size: a sample split between
+/// chunks is completed by the next call. Optionally rejects values above a maximum (PGM's
+/// maxval). The destination vector must already have one element per voxel.
+class SampleWriter {
 public:
-    MaskWriter(const std::string& path, SampleFormat format, const ValueRange& range, std::vector<std::uint8_t>& mask);
+    /// Thresholding: mask[i] = range.contains(value of voxel i).
+    SampleWriter(const std::string& path, SampleFormat format, const ValueRange& range, std::vector<std::uint8_t>& mask);
+    /// Values: values[i] = value of voxel i, rounded to float.
+    SampleWriter(const std::string& path, SampleFormat format, std::vector<float>& values);
 
     /// Values above `max_value` make consume() throw (naming the file and the voxel).
     void reject_values_above(double max_value, const std::string& limit_name);
@@ -90,17 +94,21 @@ public:
     void consume(const std::uint8_t* data, std::size_t count);
 
     std::uint64_t samples_written() const { return written_; }
-    bool complete() const { return written_ == mask_.size() && pending_size_ == 0; }
+    bool complete() const { return written_ == size_ && pending_size_ == 0; }
 
 private:
+    SampleWriter(const std::string& path, SampleFormat format, std::uint64_t size);
     void emit(const std::uint8_t* sample);
 
     std::string path_;
     SampleFormat format_;
     ValueRange range_;
-    std::vector<std::uint8_t>& mask_;
+    std::uint8_t* mask_ = nullptr;  ///< exactly one of mask_ / values_ is set
+    float* values_ = nullptr;
+    std::uint64_t size_ = 0;
     bool use_byte_table_ = false;
-    std::uint8_t byte_table_[256] = {};  ///< mask value of each byte, for 1-byte samples
+    double byte_table_[256] = {};        ///< decoded value of each byte, for 1-byte samples
+    std::uint8_t mask_table_[256] = {};  ///< its mask value (thresholding, 1-byte samples)
     bool has_max_ = false;
     double max_value_ = 0.0;
     std::string max_name_;
@@ -108,6 +116,54 @@ private:
     std::size_t pending_size_ = 0;
     std::uint64_t written_ = 0;
 };
+
+/// The name the thresholding decoder had before it could also keep values.
+using MaskWriter = SampleWriter;
+
+/// What a reader produces: a mask thresholded by a ValueRange (read_volume) or the values
+/// themselves as floats (read_volume_values). Readers call allocate() once the header is
+/// checked, then feed it through writer() (binary payloads) or set() (ASCII payloads).
+class VoxelDestination {
+public:
+    static VoxelDestination mask(const ValueRange& range);
+    static VoxelDestination values();
+
+    /// Storage for `dims` voxels (spacing 1, origin 0). Throws dsreg::Error naming `path` if
+    /// the memory cannot be allocated.
+    void allocate(const std::string& path, const Index3& dims);
+    std::uint64_t size() const { return static_cast<std::uint64_t>(grid_.voxel_count()); }
+    /// Stores the value of voxel `index` (thresholded or rounded to float).
+    void set(std::uint64_t index, double value) {
+        if (keep_values_)
+            values_[index] = static_cast<float>(value);
+        else
+            mask_[index] = range_.contains(value) ? 1 : 0;
+    }
+    /// A decoder of encoded samples into this destination.
+    SampleWriter writer(const std::string& path, SampleFormat format);
+
+    BinaryVolume take_mask();
+    ScalarVolume take_values();
+
+private:
+    VoxelDestination(bool keep_values, const ValueRange& range) : keep_values_(keep_values), range_(range) {}
+
+    bool keep_values_;
+    ValueRange range_;
+    VoxelGrid grid_;
+    std::vector<std::uint8_t> mask_;
+    std::vector<float> values_;
+};
+
+// The format readers, each decoding one file into a destination (vol_format.cpp,
+// pgm3d_format.cpp, raw_format.cpp), and the dispatch on the extension (volume_io.cpp).
+void read_vol_voxels(const std::string& path, const VolumeLimits& limits, VoxelDestination& destination);
+void read_longvol_voxels(const std::string& path, const VolumeLimits& limits, VoxelDestination& destination);
+void read_pgm3d_voxels(const std::string& path, const VolumeLimits& limits, VoxelDestination& destination);
+void read_raw_voxels(const std::string& path, const RawVolumeLayout& layout, const VolumeLimits& limits,
+                     VoxelDestination& destination);
+void read_volume_voxels(const std::string& path, const RawVolumeLayout* raw_layout, const VolumeLimits& limits,
+                        VoxelDestination& destination);
 
 /// "5x4x3 = 60 voxels" or, for wider samples, "5x4x3 = 60 voxels x 8 bytes = 480 bytes".
 std::string describe_payload(const Index3& dims, std::int64_t voxels, int bytes_per_value);
@@ -123,12 +179,12 @@ void require_exact_payload(const InputFile& file, std::uint64_t expected_bytes, 
 void require_plausible_zlib_payload(const InputFile& file, std::uint64_t expected_bytes, const std::string& description);
 
 /// Feeds the rest of the file (exactly the expected size, already checked) to `sink`.
-void decode_stored_payload(InputFile& file, MaskWriter& sink);
+void decode_stored_payload(InputFile& file, SampleWriter& sink);
 
 /// Inflates the zlib stream filling the rest of the file into `sink`, with a hard cap at
 /// `expected_bytes`: more output, less output, a corrupt stream or bytes after the end of the
 /// stream all throw, naming the file.
-void decode_zlib_payload(InputFile& file, std::uint64_t expected_bytes, MaskWriter& sink, const std::string& description);
+void decode_zlib_payload(InputFile& file, std::uint64_t expected_bytes, SampleWriter& sink, const std::string& description);
 
 /// Writes a payload to a stream, either as is or as one zlib stream (what zlib's compress()
 /// would produce), in bounded chunks.

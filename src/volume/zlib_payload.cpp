@@ -1,5 +1,5 @@
 // dsreg — zlib payloads of .vol / .longvol version 3: bounded streaming inflate into a
-// MaskWriter, and streaming deflate for the writers.
+// SampleWriter, and streaming deflate for the writers.
 #include <algorithm>
 #include <limits>
 
@@ -56,7 +56,7 @@ void require_plausible_zlib_payload(const InputFile& file, std::uint64_t expecte
                   "-byte zlib payload can inflate to at most " + std::to_string(max_bytes) + " bytes");
 }
 
-void decode_zlib_payload(InputFile& file, std::uint64_t expected_bytes, MaskWriter& sink, const std::string& description) {
+void decode_zlib_payload(InputFile& file, std::uint64_t expected_bytes, SampleWriter& sink, const std::string& description) {
     Inflater inflater(file);
     z_stream& stream = inflater.stream();
     std::vector<std::uint8_t> input(std::size_t(1) << 16);

@@ -1,0 +1,181 @@
+#include "regularization_options.hpp"
+
+#include <cmath>
+#include <iostream>
+
+#include "dsreg/clamped_regularization.hpp"
+#include "dsreg/error.hpp"
+#include "dsreg/local_weights.hpp"
+#include "dsreg/regularization_metrics.hpp"
+#include "dsreg/volume_io.hpp"
+
+namespace dsreg::cli {
+
+namespace {
+
+/// Where one local multiplier comes from.
+struct WeightSource {
+    const char* name;          ///< "alpha", "beta", "gamma"
+    const std::string& map;    ///< scalar volume, or empty
+    const std::string& file;   ///< text file, or empty
+    bool per_face;             ///< beta: one value per face
+};
+
+std::vector<WeightSource> weight_sources(const ExtensionOptions& o) {
+    return {{"alpha", o.alpha_map, o.alpha_file, false},
+            {"beta", o.beta_map, o.beta_file, true},
+            {"gamma", o.gamma_map, o.gamma_file, false}};
+}
+
+/// The input's raw layout (type, byte order, header) with the surface grid's dimensions.
+RawVolumeLayout map_raw_layout(const VolumeSourceOptions& source, const DigitalSurface& surface) {
+    RawVolumeLayout layout;
+    layout.dims = surface.grid.dims;
+    layout.type = parse_raw_voxel_type(source.raw_type);
+    layout.big_endian = source.raw_big_endian;
+    layout.header_bytes = source.raw_header_bytes;
+    return layout;
+}
+
+Eigen::VectorXd read_multipliers(const WeightSource& w, const VolumeSourceOptions& source, const DigitalSurface& surface) {
+    if (!w.file.empty())
+        return read_values_file(w.file, w.per_face ? surface.face_count() : surface.vertex_count(),
+                                std::string(w.per_face ? "per-face " : "per-vertex ") + w.name);
+    VolumeLimits limits;
+    limits.max_voxels = source.max_voxels;
+    const RawVolumeLayout layout = map_raw_layout(source, surface);
+    const ScalarVolume map = read_volume_values(w.map, &layout, limits);
+    const Eigen::VectorXd at_vertices = sample_at_vertices(map, surface);
+    return w.per_face ? face_means(surface.quads, at_vertices) : at_vertices;
+}
+
+Eigen::VectorXd& multiplier_slot(RegularizationWeights& weights, const std::string& name) {
+    if (name == "alpha") return weights.vertex_alpha;
+    if (name == "beta") return weights.face_beta;
+    return weights.vertex_gamma;
+}
+
+const Eigen::VectorXd& multiplier_of(const RegularizationWeights& weights, const std::string& name) {
+    if (name == "alpha") return weights.vertex_alpha;
+    if (name == "beta") return weights.face_beta;
+    return weights.vertex_gamma;
+}
+
+nlohmann::json local_weights_json(const ExtensionOptions& o, const RegularizationWeights& weights) {
+    nlohmann::json json = nlohmann::json::object();
+    for (const WeightSource& w : weight_sources(o)) {
+        const Eigen::VectorXd& values = multiplier_of(weights, w.name);
+        if (values.size() == 0) {
+            json[w.name] = nullptr;
+            continue;
+        }
+        json[w.name] = {{"source", w.file.empty() ? "map" : "file"},
+                        {"path", w.file.empty() ? w.map : w.file},
+                        {"min", values.minCoeff()},
+                        {"max", values.maxCoeff()},
+                        {"mean", values.mean()}};
+    }
+    return json;
+}
+
+nlohmann::json energy_json(const EnergyTerms& e, const RegularizationWeights& w) {
+    return {{"data", e.data}, {"alignment", e.alignment}, {"fairness", e.fairness}, {"total", e.total(w)}};
+}
+
+nlohmann::json clamp_json(const ExtensionOptions& o, const ClampedRegularizationResult& r, const RegularizationWeights& w,
+                          const VoxelAgreement& clamped, const VoxelAgreement& unclamped) {
+    const BoxQpReport& q = r.clamp.qp;
+    return {{"half_width_voxels", o.clamp_half_width},
+            {"tolerance", o.clamp_tolerance},
+            {"converged", q.converged},
+            {"kkt_residual", q.kkt_residual},
+            {"stationarity", q.stationarity},
+            {"multiplier_sign", q.multiplier_sign},
+            {"constraint_violation", q.constraint_violation},
+            {"coordinates_at_lower", q.at_lower},
+            {"coordinates_at_upper", q.at_upper},
+            {"clamped_vertices", r.clamp.clamped_vertices},
+            {"admm_iterations", q.admm_iterations},
+            {"admm_rho", q.admm_rho},
+            {"active_set_iterations", q.active_set_iterations},
+            {"active_set_cycled", q.active_set_cycled},
+            {"newton_iterations", q.newton_iterations},
+            {"factorizations", q.factorizations},
+            {"factor_nonzeros", q.factor_nonzeros},
+            {"seconds", {{"unclamped_solve", q.unconstrained_seconds},
+                         {"admm", q.admm_seconds},
+                         {"active_set", q.active_set_seconds}}},
+            {"unclamped", {{"relative_residual", q.unconstrained_residual},
+                           {"vertices_outside_box", r.clamp.unclamped_vertices_outside},
+                           {"max_excess_voxels", r.clamp.unclamped_max_excess},
+                           {"energy", energy_json(r.clamp.unclamped_energy, w)},
+                           {"voxel_centres_wrong", unclamped.wrong()}}},
+            {"voxel_centres", {{"total", clamped.total},
+                               {"correct", clamped.correct},
+                               {"object_outside", clamped.object_outside},
+                               {"background_inside", clamped.background_inside}}}};
+}
+
+}  // namespace
+
+void add_regularization_extension_options(CLI::App& command, ExtensionOptions& o) {
+    command.add_flag("--clamp", o.clamp,
+                     "Reversible mode: keep each vertex within --clamp-half-width voxels of its digital position on each "
+                     "axis (exact box-constrained minimizer)");
+    command.add_option("--clamp-tolerance", o.clamp_tolerance, "Relative KKT residual the clamped solve must reach")
+        ->capture_default_str();
+    command.add_option("--clamp-half-width", o.clamp_half_width,
+                       "Box half-width in voxels (0.5 = the cube of the 8 voxel centres around a vertex; below 0.5 every "
+                       "voxel centre stays strictly on its side)")
+        ->capture_default_str();
+    command.add_option("--metric", o.metric, "Metrics W0, W2: identity (paper) or area (estimated face and dual vertex areas)")
+        ->check(CLI::IsMember(metric_names()))
+        ->capture_default_str();
+    const char* map_help = " multipliers from a scalar volume on the input grid (mean of the 8 voxels around each vertex)";
+    command.add_option("--alpha-map", o.alpha_map, std::string("Per-vertex alpha") + map_help);
+    command.add_option("--beta-map", o.beta_map, std::string("Per-face beta") + map_help + "; faces: mean of their vertices");
+    command.add_option("--gamma-map", o.gamma_map, std::string("Per-vertex gamma") + map_help);
+    command.add_option("--alpha-file", o.alpha_file, "Per-vertex alpha multipliers: text file, one value per vertex in mesh order");
+    command.add_option("--beta-file", o.beta_file, "Per-face beta multipliers: text file, one value per face in mesh order");
+    command.add_option("--gamma-file", o.gamma_file, "Per-vertex gamma multipliers: text file, one value per vertex in mesh order");
+}
+
+void check_regularization_extension_options(const ExtensionOptions& o) {
+    if (!(o.clamp_tolerance > 0) || !std::isfinite(o.clamp_tolerance)) throw Error("--clamp-tolerance must be positive");
+    if (!(o.clamp_half_width > 0) || !std::isfinite(o.clamp_half_width)) throw Error("--clamp-half-width must be positive");
+    parse_metric_kind(o.metric);
+    for (const WeightSource& w : weight_sources(o))
+        if (!w.map.empty() && !w.file.empty())
+            throw Error(std::string("give either --") + w.name + "-map or --" + w.name + "-file, not both");
+}
+
+void apply_regularization_extensions(const ExtensionOptions& o, const VolumeSourceOptions& source, const DigitalSurface& surface,
+                                     const PointMatrix& normals, RegularizationWeights& weights) {
+    check_regularization_extension_options(o);
+    apply_metric(parse_metric_kind(o.metric), surface, normals, weights);
+    for (const WeightSource& w : weight_sources(o))
+        if (!w.map.empty() || !w.file.empty()) multiplier_slot(weights, w.name) = read_multipliers(w, source, surface);
+    validate_weights(weights, surface.vertex_count(), surface.face_count());
+}
+
+RegularizationResult run_regularization(const ExtensionOptions& o, const BinaryVolume& volume, const DigitalSurface& surface,
+                                        const PointMatrix& normals, const RegularizationWeights& weights,
+                                        const SolverOptions& solver, nlohmann::json& report) {
+    report["metric"] = o.metric;
+    report["local_weights"] = local_weights_json(o, weights);
+    if (!o.clamp) return regularize(surface, normals, weights, solver);
+
+    ClampOptions clamp;  // CHOLMOD throughout: the --solver choice does not apply
+    clamp.qp.tolerance = o.clamp_tolerance;
+    clamp.half_width = o.clamp_half_width;
+    const ClampedRegularizationResult result = regularize_clamped(surface, normals, weights, clamp);
+    const VoxelAgreement clamped = classify_voxel_centres(volume, result.positions, surface.quads);
+    const VoxelAgreement unclamped = classify_voxel_centres(volume, result.unclamped_positions, surface.quads);
+    report["clamp"] = clamp_json(o, result, weights, clamped, unclamped);
+    if (!result.clamp.qp.converged)
+        std::cerr << "dsreg: warning: the clamped solve stopped at a relative KKT residual of " << result.clamp.qp.kkt_residual
+                  << ", above --clamp-tolerance " << o.clamp_tolerance << '\n';
+    return result;
+}
+
+}  // namespace dsreg::cli

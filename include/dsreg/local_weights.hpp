@@ -1,0 +1,44 @@
+// dsreg — sources of the local multipliers α_i, β_f, γ_i of the regularization energy
+// (RegularizationWeights::vertex_alpha, face_beta, vertex_gamma; beyond the paper).
+//
+// Two sources:
+//  * a scalar volume on the same voxel grid as the binary volume the surface came from (e.g. a
+//    confidence or probability map of a segmentation), sampled at the vertices: the value of a
+//    vertex is the mean of the values of the 8 voxels around its pointel — voxels (a−1 … a,
+//    b−1 … b, c−1 … c) for pointel (a,b,c), see volume.hpp — leaving out those outside the
+//    grid; the value of a face is the mean of its 4 vertex values;
+//  * a text file holding one value per vertex (or per face) in mesh order: the vertex and face
+//    order of the surface (DigitalSurface::vertices / quads), which is also the order of the
+//    written mesh files. Numbers are separated by whitespace; '#' starts a comment that runs to
+//    the end of the line.
+// Values are used as given (dimensionless multipliers); validate_weights() rejects α_i ≤ 0 and
+// β_f, γ_i < 0.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+
+#include "dsreg/digital_surface.hpp"
+#include "dsreg/mesh.hpp"
+#include "dsreg/volume_io.hpp"
+
+namespace dsreg {
+
+/// Mean of the values of the voxels around each vertex's pointel that lie in the grid (at least
+/// one always does). Throws dsreg::Error unless the volume has the surface grid's dims.
+Eigen::VectorXd sample_at_vertices(const ScalarVolume& volume, const DigitalSurface& surface);
+
+/// Mean of the per-vertex values over the vertices of each face.
+Eigen::VectorXd face_means(const FaceMatrix& faces, const Eigen::VectorXd& vertex_values);
+
+/// Reads exactly `expected_count` numbers from a text file (format above). `what` names the
+/// values in messages (e.g. "per-vertex alpha"). Throws dsreg::Error "PATH:LINE: problem" for a
+/// token that is not a finite number, and "PATH: …" for too few or too many values.
+Eigen::VectorXd read_values_file(const std::string& path, std::int64_t expected_count, const std::string& what);
+
+/// Writes one value per line with 17 significant digits, so read_values_file() gives back the
+/// same doubles (atomic write).
+void write_values_file(const std::string& path, const Eigen::VectorXd& values);
+
+}  // namespace dsreg

@@ -1,0 +1,397 @@
+// dsreg — box-constrained strictly convex QP: ADMM on one Cholesky factor, primal–dual active
+// set iterations to the exact solution, projected Newton as a monotone fallback.
+#include "dsreg/box_qp.hpp"
+
+#include <Eigen/CholmodSupport>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "dsreg/error.hpp"
+
+namespace dsreg {
+
+namespace {
+
+using SparseMatrix = Eigen::SparseMatrix<double>;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+Eigen::VectorXd project(const Eigen::VectorXd& x, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper) {
+    return x.cwiseMax(lower).cwiseMin(upper);
+}
+
+/// Which bound holds a coordinate (exact comparisons: projection puts x_i exactly on its bound).
+enum class Bound : std::int8_t { None, Lower, Upper, Both };
+
+Bound bound_state(double x, double lower, double upper) {
+    if (lower == upper) return Bound::Both;
+    if (x <= lower) return Bound::Lower;
+    if (x >= upper) return Bound::Upper;
+    return Bound::None;
+}
+
+std::vector<Bound> bound_states(const Eigen::VectorXd& x, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper) {
+    std::vector<Bound> states(std::size_t(x.size()));
+    for (Eigen::Index i = 0; i < x.size(); ++i) states[std::size_t(i)] = bound_state(x[i], lower[i], upper[i]);
+    return states;
+}
+
+double reference_norm(const Eigen::VectorXd& b) {
+    const double norm = b.norm();
+    return norm > 0 ? norm : 1.0;
+}
+
+void check_problem(const SparseMatrix& R, const Eigen::VectorXd& b, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper) {
+    const Eigen::Index n = b.size();
+    if (R.rows() != n || R.cols() != n || lower.size() != n || upper.size() != n)
+        throw Error("box QP: inconsistent sizes (matrix " + std::to_string(R.rows()) + "x" + std::to_string(R.cols()) + ", " +
+                    std::to_string(n) + " unknowns)");
+    if (!b.allFinite() || !lower.allFinite() || !upper.allFinite())
+        throw Error("box QP: non-finite right-hand side or bound");
+    for (Eigen::Index i = 0; i < n; ++i)
+        if (lower[i] > upper[i])
+            throw Error("box QP: lower bound " + std::to_string(lower[i]) + " above upper bound " + std::to_string(upper[i]) +
+                        " at coordinate " + std::to_string(i));
+    if (!(R.diagonal().array() > 0).all()) throw Error("box QP: the matrix has a non-positive diagonal entry");
+}
+
+/// Largest absolute row sum: an upper bound of the largest eigenvalue of a symmetric matrix.
+double gershgorin_bound(const SparseMatrix& R) {
+    double largest = 0;
+    for (Eigen::Index j = 0; j < R.outerSize(); ++j) {
+        double sum = 0;
+        for (SparseMatrix::InnerIterator it(R, j); it; ++it) sum += std::abs(it.value());
+        largest = std::max(largest, sum);
+    }
+    return largest;
+}
+
+double automatic_rho(const SparseMatrix& R, const BoxQpOptions& options) {
+    if (options.admm_rho > 0) return options.admm_rho;
+    double low = options.smallest_eigenvalue_bound;
+    if (!(low > 0)) low = R.diagonal().minCoeff() / 1000.0;
+    return std::sqrt(low * gershgorin_bound(R));
+}
+
+/// Cholesky factorizations of matrices with the pattern of R (R + ρI, or R with some rows and
+/// columns replaced by the identity), sharing one symbolic analysis (CHOLMOD supernodal).
+class PatternFactorizer {
+public:
+    explicit PatternFactorizer(const SparseMatrix& R) : R_(R), diagonal_(R.diagonal()) {
+        R_.makeCompressed();
+        work_ = R_;
+        cholesky_.analyzePattern(R_);
+        if (cholesky_.info() != Eigen::Success) throw Error("box QP: CHOLMOD could not analyze the matrix");
+    }
+
+    /// Factorizes R + ρI.
+    void factorize_shifted(double rho) {
+        cholesky_.setShift(rho);
+        factorize(R_, "R + rho I");
+        cholesky_.setShift(0.0);
+    }
+
+    /// Factorizes R with the rows and columns of the held coordinates replaced by diag(R_ii):
+    /// solving with it gives x_F = R_FF⁻¹ r_F and x_i = r_i / R_ii for held i.
+    void factorize_held(const std::vector<bool>& held) {
+        for (Eigen::Index j = 0; j < R_.outerSize(); ++j) {
+            for (SparseMatrix::InnerIterator it(R_, j), out(work_, j); it; ++it, ++out) {
+                const bool masked = held[std::size_t(it.row())] || held[std::size_t(j)];
+                out.valueRef() = !masked ? it.value() : (it.row() == j ? it.value() : 0.0);
+            }
+        }
+        factorize(work_, "the free-variable submatrix R_FF");
+    }
+
+    Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const { return cholesky_.solve(rhs); }
+    int factorizations() const { return factorizations_; }
+    double factor_nonzeros() { return double(cholesky_.cholmod().lnz); }
+    const Eigen::VectorXd& diagonal() const { return diagonal_; }
+
+private:
+    void factorize(const SparseMatrix& matrix, const std::string& what) {
+        cholesky_.factorize(matrix);
+        ++factorizations_;
+        if (cholesky_.info() != Eigen::Success) throw Error("box QP: CHOLMOD could not factor " + what + " (not positive definite)");
+    }
+
+    SparseMatrix R_;
+    SparseMatrix work_;  ///< same pattern as R_, masked values
+    Eigen::VectorXd diagonal_;
+    Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lower> cholesky_;
+    int factorizations_ = 0;
+};
+
+// ---------------------------------------------------------------------------------------------
+// 1. ADMM: min q(x) + indicator_box(z) s.t. x = z, scaled dual w.
+//   x ← (R + ρI)⁻¹ (b + ρ(z − w)),   z ← Π(x + w),   w ← w + x − z.
+// One numeric factorization; stops when the coordinates at their bounds stay the same.
+
+int run_admm(PatternFactorizer& factorizer, const Eigen::VectorXd& b, const Eigen::VectorXd& lower,
+             const Eigen::VectorXd& upper, Eigen::VectorXd& x, double rho, const BoxQpOptions& options) {
+    factorizer.factorize_shifted(rho);
+    Eigen::VectorXd z = project(x, lower, upper);
+    Eigen::VectorXd w = Eigen::VectorXd::Zero(x.size());
+    std::vector<Bound> previous = bound_states(z, lower, upper);
+    int stable = 0, iterations = 0;
+    while (iterations < options.admm_max_iterations && stable < options.admm_stable_iterations) {
+        x = factorizer.solve(b + rho * (z - w));
+        z = project(x + w, lower, upper);
+        w += x - z;
+        ++iterations;
+        std::vector<Bound> states = bound_states(z, lower, upper);
+        stable = states == previous ? stable + 1 : 0;
+        previous.swap(states);
+    }
+    x = z;
+    return iterations;
+}
+
+// ---------------------------------------------------------------------------------------------
+// 2. Primal–dual active set (semismooth Newton on min(x − l, max(x − u, x − g/D)) = 0).
+
+/// Active-set estimate from (x, g): i goes to its lower (upper) bound when the scaled gradient
+/// step x_i − g_i / R_ii falls below (above) it.
+std::vector<Bound> active_set_estimate(const Eigen::VectorXd& x, const Eigen::VectorXd& g, const Eigen::VectorXd& diagonal,
+                                       const Eigen::VectorXd& lower, const Eigen::VectorXd& upper) {
+    std::vector<Bound> states(std::size_t(x.size()));
+    for (Eigen::Index i = 0; i < x.size(); ++i) {
+        const double trial = x[i] - g[i] / diagonal[i];
+        states[std::size_t(i)] = lower[i] == upper[i] ? Bound::Both
+                                 : trial < lower[i]   ? Bound::Lower
+                                 : trial > upper[i]   ? Bound::Upper
+                                                      : Bound::None;
+    }
+    return states;
+}
+
+/// x_A at its bounds, x_F = R_FF⁻¹ (b_F − R_FA x_A).
+Eigen::VectorXd solve_on_active_set(PatternFactorizer& factorizer, const SparseMatrix& R, const Eigen::VectorXd& b,
+                                    const std::vector<Bound>& states, const Eigen::VectorXd& lower,
+                                    const Eigen::VectorXd& upper) {
+    const Eigen::Index n = b.size();
+    std::vector<bool> held(static_cast<std::size_t>(n));
+    Eigen::VectorXd fixed = Eigen::VectorXd::Zero(n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+        const Bound s = states[std::size_t(i)];
+        held[std::size_t(i)] = s != Bound::None;
+        if (s == Bound::Lower || s == Bound::Both) fixed[i] = lower[i];
+        if (s == Bound::Upper) fixed[i] = upper[i];
+    }
+    Eigen::VectorXd rhs = b - R * fixed;
+    for (Eigen::Index i = 0; i < n; ++i)
+        if (held[std::size_t(i)]) rhs[i] = factorizer.diagonal()[i] * fixed[i];
+    factorizer.factorize_held(held);
+    Eigen::VectorXd x = factorizer.solve(rhs);
+    for (Eigen::Index i = 0; i < n; ++i)
+        if (held[std::size_t(i)]) x[i] = fixed[i];  // exactly on the bound
+    return x;
+}
+
+std::size_t hash_states(const std::vector<Bound>& states) {
+    std::string bytes(states.size(), '\0');
+    for (std::size_t i = 0; i < states.size(); ++i) bytes[i] = static_cast<char>(states[i]);
+    return std::hash<std::string>{}(bytes);
+}
+
+/// Runs the active set iterations from x; returns true when the active sets repeated (KKT
+/// point), false on a cycle or the iteration limit. x is left at the last iterate (feasible up
+/// to rounding when true).
+bool run_active_set(PatternFactorizer& factorizer, const SparseMatrix& R, const Eigen::VectorXd& b,
+                    const Eigen::VectorXd& lower, const Eigen::VectorXd& upper, Eigen::VectorXd& x,
+                    const BoxQpOptions& options, BoxQpReport& report) {
+    Eigen::VectorXd g = R * x - b;
+    std::vector<Bound> states = active_set_estimate(x, g, factorizer.diagonal(), lower, upper);
+    std::set<std::size_t> seen{hash_states(states)};
+    for (int iteration = 0; iteration < options.active_set_max_iterations; ++iteration) {
+        x = solve_on_active_set(factorizer, R, b, states, lower, upper);
+        ++report.active_set_iterations;
+        g = R * x - b;
+        for (Eigen::Index i = 0; i < x.size(); ++i)
+            if (states[std::size_t(i)] == Bound::None) g[i] = 0;  // the multiplier of a free coordinate is 0
+        std::vector<Bound> next = active_set_estimate(x, g, factorizer.diagonal(), lower, upper);
+        if (next == states) return true;
+        if (!seen.insert(hash_states(next)).second) {
+            report.active_set_cycled = true;
+            return false;
+        }
+        states.swap(next);
+    }
+    return false;
+}
+
+// ---------------------------------------------------------------------------------------------
+// 3. Projected Newton (Bertsekas 1982) on the ε-active set: the monotone fallback.
+
+/// Coordinates held at a bound this iteration: within ε of it, with the gradient pushing out.
+std::vector<bool> epsilon_active(const Eigen::VectorXd& x, const Eigen::VectorXd& g, const Eigen::VectorXd& lower,
+                                 const Eigen::VectorXd& upper, double epsilon) {
+    std::vector<bool> active(std::size_t(x.size()));
+    for (Eigen::Index i = 0; i < x.size(); ++i)
+        active[std::size_t(i)] = lower[i] == upper[i] || (x[i] <= lower[i] + epsilon && g[i] > 0) ||
+                                 (x[i] >= upper[i] - epsilon && g[i] < 0);
+    return active;
+}
+
+/// Newton on the free coordinates (R_FF d_F = −g_F), scaled gradient −g_i / R_ii on the
+/// active ones.
+Eigen::VectorXd newton_direction(PatternFactorizer& factorizer, const Eigen::VectorXd& g, const std::vector<bool>& active) {
+    Eigen::VectorXd rhs = -g;
+    for (Eigen::Index i = 0; i < g.size(); ++i)
+        if (active[std::size_t(i)]) rhs[i] = 0;
+    factorizer.factorize_held(active);
+    Eigen::VectorXd d = factorizer.solve(rhs);
+    for (Eigen::Index i = 0; i < g.size(); ++i)
+        if (active[std::size_t(i)]) d[i] = -g[i] / factorizer.diagonal()[i];
+    return d;
+}
+
+/// Armijo search along the projection arc x(t) = Π(x + t d): accepts the first t = 1, ½, ¼, …
+/// with q(x(t)) − q(x) ≤ σ (t g_Fᵀ d_F + g_Aᵀ (x(t) − x)_A). Returns false if none is found.
+bool projected_search(const SparseMatrix& R, const Eigen::VectorXd& g, const Eigen::VectorXd& d, const std::vector<bool>& active,
+                      const Eigen::VectorXd& lower, const Eigen::VectorXd& upper, Eigen::VectorXd& x) {
+    constexpr double sigma = 1e-4;
+    constexpr int max_halvings = 40;
+    double free_slope = 0;  // g_Fᵀ d_F ≤ 0
+    for (Eigen::Index i = 0; i < g.size(); ++i)
+        if (!active[std::size_t(i)]) free_slope += g[i] * d[i];
+    double t = 1;
+    for (int halving = 0; halving <= max_halvings; ++halving, t *= 0.5) {
+        const Eigen::VectorXd trial = project(x + t * d, lower, upper);
+        const Eigen::VectorXd step = trial - x;
+        double active_slope = 0;  // g_Aᵀ Δ_A ≤ 0
+        for (Eigen::Index i = 0; i < g.size(); ++i)
+            if (active[std::size_t(i)]) active_slope += g[i] * step[i];
+        if (box_qp_energy_change(R, g, step) <= sigma * (t * free_slope + active_slope)) {
+            x = trial;
+            return true;
+        }
+    }
+    return false;
+}
+
+void run_projected_newton(PatternFactorizer& factorizer, const SparseMatrix& R, const Eigen::VectorXd& b,
+                          const Eigen::VectorXd& lower, const Eigen::VectorXd& upper, Eigen::VectorXd& x,
+                          const BoxQpOptions& options, BoxQpReport& report) {
+    double smallest_width = std::numeric_limits<double>::infinity();
+    for (Eigen::Index i = 0; i < x.size(); ++i)
+        if (upper[i] > lower[i]) smallest_width = std::min(smallest_width, upper[i] - lower[i]);
+    const double epsilon_cap = std::isfinite(smallest_width) ? 0.1 * smallest_width : 0.0;
+    x = project(x, lower, upper);
+    for (; report.newton_iterations < options.newton_max_iterations; ++report.newton_iterations) {
+        if (box_qp_optimality(R, b, lower, upper, x, options.tolerance).converged) break;
+        const Eigen::VectorXd g = R * x - b;
+        // ε = min(ε̄, ‖x − Π(x − D⁻¹g)‖∞): shrinks to 0 as x approaches the solution.
+        const Eigen::VectorXd trial = project(x - g.cwiseQuotient(factorizer.diagonal()), lower, upper);
+        const double epsilon = std::min(epsilon_cap, (x - trial).lpNorm<Eigen::Infinity>());
+        const std::vector<bool> active = epsilon_active(x, g, lower, upper, epsilon);
+        const Eigen::VectorXd d = newton_direction(factorizer, g, active);
+        if (!projected_search(R, g, d, active, lower, upper, x)) break;  // no descent left at double precision
+    }
+}
+
+}  // namespace
+
+double box_qp_energy_change(const SparseMatrix& R, const Eigen::VectorXd& gradient, const Eigen::VectorXd& step) {
+    return gradient.dot(step) + 0.5 * step.dot(R * step);
+}
+
+BoxQpReport box_qp_optimality(const SparseMatrix& R, const Eigen::VectorXd& b, const Eigen::VectorXd& lower,
+                              const Eigen::VectorXd& upper, const Eigen::VectorXd& x, double tolerance) {
+    BoxQpReport report;
+    const Eigen::VectorXd feasible = project(x, lower, upper);
+    report.constraint_violation = (x - feasible).lpNorm<Eigen::Infinity>();
+    const Eigen::VectorXd g = R * feasible - b;
+    double free_sum = 0, sign_sum = 0;
+    for (Eigen::Index i = 0; i < x.size(); ++i) {
+        switch (bound_state(feasible[i], lower[i], upper[i])) {
+        case Bound::None: free_sum += g[i] * g[i]; break;
+        case Bound::Lower: ++report.at_lower; sign_sum += g[i] < 0 ? g[i] * g[i] : 0.0; break;
+        case Bound::Upper: ++report.at_upper; sign_sum += g[i] > 0 ? g[i] * g[i] : 0.0; break;
+        case Bound::Both: ++report.at_lower; ++report.at_upper; break;  // fixed: any multiplier
+        }
+    }
+    const double scale = reference_norm(b);
+    report.stationarity = std::sqrt(free_sum) / scale;
+    report.multiplier_sign = std::sqrt(sign_sum) / scale;
+    report.kkt_residual = std::sqrt(free_sum + sign_sum) / scale;
+    report.converged = report.kkt_residual <= tolerance && report.constraint_violation == 0;
+    return report;
+}
+
+namespace {
+
+/// Steps 1–3 from x (already checked), on the factorizer's analysis of R.
+BoxQpReport solve_from(PatternFactorizer& factorizer, const SparseMatrix& R, const Eigen::VectorXd& b,
+                       const Eigen::VectorXd& lower, const Eigen::VectorXd& upper, Eigen::VectorXd& x,
+                       const BoxQpOptions& options, double analysis_seconds) {
+    const BoxQpReport initial = box_qp_optimality(R, b, lower, upper, x, options.tolerance);
+    if (initial.converged) return initial;  // e.g. the unconstrained minimizer lies in the box
+
+    BoxQpReport counts;
+    auto started = Clock::now();
+    if (options.admm_max_iterations > 0) {
+        counts.admm_rho = automatic_rho(R, options);
+        counts.admm_iterations = run_admm(factorizer, b, lower, upper, x, counts.admm_rho, options);
+    }
+    counts.admm_seconds = analysis_seconds + seconds_since(started);
+
+    started = Clock::now();
+    const bool settled = run_active_set(factorizer, R, b, lower, upper, x, options, counts);
+    x = project(x, lower, upper);
+    if (!settled || !box_qp_optimality(R, b, lower, upper, x, options.tolerance).converged)
+        run_projected_newton(factorizer, R, b, lower, upper, x, options, counts);
+    counts.active_set_seconds = seconds_since(started);
+
+    BoxQpReport report = box_qp_optimality(R, b, lower, upper, x, options.tolerance);
+    report.admm_iterations = counts.admm_iterations;
+    report.active_set_iterations = counts.active_set_iterations;
+    report.active_set_cycled = counts.active_set_cycled;
+    report.newton_iterations = counts.newton_iterations;
+    report.admm_rho = counts.admm_rho;
+    report.admm_seconds = counts.admm_seconds;
+    report.active_set_seconds = counts.active_set_seconds;
+    return report;
+}
+
+}  // namespace
+
+BoxQpReport solve_box_qp(const SparseMatrix& R, const Eigen::VectorXd& b, const Eigen::VectorXd& lower,
+                         const Eigen::VectorXd& upper, Eigen::VectorXd& x, const BoxQpOptions& options) {
+    check_problem(R, b, lower, upper);
+    if (x.size() != b.size() || !x.allFinite()) throw Error("box QP: the starting point has the wrong size or is not finite");
+    const BoxQpReport initial = box_qp_optimality(R, b, lower, upper, x, options.tolerance);
+    if (initial.converged) return initial;
+    const auto started = Clock::now();
+    PatternFactorizer factorizer(R);
+    BoxQpReport report = solve_from(factorizer, R, b, lower, upper, x, options, seconds_since(started));
+    report.factorizations = factorizer.factorizations();
+    return report;
+}
+
+BoxQpReport solve_box_qp_from_unconstrained(const SparseMatrix& R, const Eigen::VectorXd& b, const Eigen::VectorXd& lower,
+                                            const Eigen::VectorXd& upper, Eigen::VectorXd& unconstrained, Eigen::VectorXd& x,
+                                            const BoxQpOptions& options) {
+    check_problem(R, b, lower, upper);
+    auto started = Clock::now();
+    PatternFactorizer factorizer(R);
+    factorizer.factorize_held(std::vector<bool>(std::size_t(b.size()), false));
+    unconstrained = factorizer.solve(b);
+    const double unconstrained_seconds = seconds_since(started);
+    x = unconstrained;
+    BoxQpReport report = solve_from(factorizer, R, b, lower, upper, x, options, 0.0);
+    report.factorizations = factorizer.factorizations();
+    report.unconstrained_seconds = unconstrained_seconds;
+    report.unconstrained_residual = (R * unconstrained - b).norm() / reference_norm(b);
+    report.factor_nonzeros = factorizer.factor_nonzeros();
+    return report;
+}
+
+}  // namespace dsreg

@@ -1,0 +1,110 @@
+// dsreg — local multipliers from a scalar volume (sampled at the vertices) or a text file.
+#include "dsreg/local_weights.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include "dsreg/atomic_file.hpp"
+#include "dsreg/error.hpp"
+
+namespace dsreg {
+
+namespace {
+
+std::string dims_text(const Index3& d) {
+    return std::to_string(d[0]) + "x" + std::to_string(d[1]) + "x" + std::to_string(d[2]);
+}
+
+/// Mean of the in-grid voxels (a−1 … a) × (b−1 … b) × (c−1 … c) around pointel (a,b,c).
+double mean_around_pointel(const ScalarVolume& volume, std::int64_t a, std::int64_t b, std::int64_t c) {
+    double sum = 0;
+    int count = 0;
+    for (std::int64_t k = c - 1; k <= c; ++k)
+        for (std::int64_t j = b - 1; j <= b; ++j)
+            for (std::int64_t i = a - 1; i <= a; ++i)
+                if (volume.grid.contains(i, j, k)) {
+                    sum += volume.value(i, j, k);
+                    ++count;
+                }
+    return count > 0 ? sum / count : 0.0;
+}
+
+/// Parses a whole token as a finite double (C syntax).
+bool parse_number(const std::string& token, double& value) {
+    errno = 0;
+    char* end = nullptr;
+    value = std::strtod(token.c_str(), &end);
+    return end == token.c_str() + token.size() && errno != ERANGE && std::isfinite(value);
+}
+
+}  // namespace
+
+Eigen::VectorXd sample_at_vertices(const ScalarVolume& volume, const DigitalSurface& surface) {
+    if (volume.grid.dims != surface.grid.dims)
+        throw Error("weight volume has dimensions " + dims_text(volume.grid.dims) + ", the surface's volume " +
+                    dims_text(surface.grid.dims) + ": they must be the same grid");
+    if (volume.values.size() != std::size_t(volume.grid.voxel_count()))
+        throw Error("weight volume holds " + std::to_string(volume.values.size()) + " values for " +
+                    std::to_string(volume.grid.voxel_count()) + " voxels");
+    Eigen::VectorXd samples(surface.vertex_count());
+    for (std::int64_t v = 0; v < surface.vertex_count(); ++v)
+        samples[v] = mean_around_pointel(volume, surface.vertex_pointels(v, 0), surface.vertex_pointels(v, 1),
+                                         surface.vertex_pointels(v, 2));
+    return samples;
+}
+
+Eigen::VectorXd face_means(const FaceMatrix& faces, const Eigen::VectorXd& vertex_values) {
+    Eigen::VectorXd means(faces.rows());
+    for (Eigen::Index f = 0; f < faces.rows(); ++f) {
+        double sum = 0;
+        for (Eigen::Index c = 0; c < faces.cols(); ++c) {
+            const std::int32_t v = faces(f, c);
+            if (v < 0 || v >= vertex_values.size())
+                throw Error("face_means: face " + std::to_string(f) + " refers to vertex " + std::to_string(v) + " of " +
+                            std::to_string(vertex_values.size()));
+            sum += vertex_values[v];
+        }
+        means[f] = sum / double(faces.cols());
+    }
+    return means;
+}
+
+Eigen::VectorXd read_values_file(const std::string& path, std::int64_t expected_count, const std::string& what) {
+    std::ifstream in(path);
+    if (!in) throw Error(path + ": cannot open the " + what + " values file");
+    Eigen::VectorXd values(expected_count);
+    std::int64_t count = 0;
+    std::string line;
+    for (std::int64_t line_number = 1; std::getline(in, line); ++line_number) {
+        const std::size_t comment = line.find('#');
+        if (comment != std::string::npos) line.erase(comment);
+        std::istringstream tokens(line);
+        std::string token;
+        while (tokens >> token) {
+            double value = 0;
+            if (!parse_number(token, value))
+                throw Error(path + ":" + std::to_string(line_number) + ": '" + token.substr(0, 40) + "' is not a finite number");
+            if (count == expected_count)
+                throw Error(path + ":" + std::to_string(line_number) + ": more than the " + std::to_string(expected_count) +
+                            " " + what + " values expected");
+            values[count++] = value;
+        }
+    }
+    if (in.bad()) throw Error(path + ": read error");
+    if (count != expected_count)
+        throw Error(path + ": " + std::to_string(count) + " " + what + " values, " + std::to_string(expected_count) +
+                    " expected (one per element, in mesh order)");
+    return values;
+}
+
+void write_values_file(const std::string& path, const Eigen::VectorXd& values) {
+    write_file_atomically(path, [&](std::ostream& out) {
+        out.precision(17);
+        for (Eigen::Index i = 0; i < values.size(); ++i) out << values[i] << '\n';
+    });
+}
+
+}  // namespace dsreg
