@@ -1,4 +1,21 @@
-// dsreg — sparse symmetric positive definite solvers for the regularization system.
+// dsreg — sparse symmetric positive definite solvers for the regularization system R x = b of
+// eq. (22–23). R is 3n×3n, made of 3×3 blocks (one block row per vertex, interleaved unknowns).
+//
+// Which solver (measured figures in docs/solvers.md):
+//   amg      CG preconditioned by smoothed aggregation algebraic multigrid. Work and memory grow
+//            linearly with the surface; 25–30 iterations with the paper's weights at every size.
+//            The choice for large surfaces unless α is tiny.
+//   cholmod  CHOLMOD supernodal Cholesky with a fill-reducing ordering: exact, insensitive to α,
+//            but its factor grows like n log n and its time like n^1.5 (4 s and 0.25 GiB at
+//            37.6K surfels with γ > 0, 124 s and 3.8 GiB at 236K). The reference solver; the
+//            choice for small surfaces and for tiny α (e.g. the paper's Fig. 7, α = 1e-5·h²).
+//   cg       CG preconditioned by the inverse 3×3 diagonal blocks: no setup, little memory, but
+//            hundreds to thousands of iterations. Kept as a baseline.
+//   auto     picks one of the above from the size of R and from α (read off R, see below).
+//
+// The iterative solvers also rely on the structure of eq. (23), R = αW0 ⊗ I3 + K with K positive
+// semi-definite and K·(translation) = 0: then the smallest eigenvalue of R is at least α·min w0,
+// and ‖x − x*‖₂ ≤ ‖R x − b‖₂ / (α min w0) = relative residual · ‖W0 p‖₂ / min w0 whatever α.
 #pragma once
 
 #include <Eigen/Core>
@@ -10,25 +27,34 @@ namespace dsreg {
 
 enum class SolverKind {
     Cholmod,            ///< CHOLMOD supernodal Cholesky with a fill-reducing ordering (reference)
-    ConjugateGradient,  ///< Jacobi-preconditioned CG, warm-started at the initial guess
+    ConjugateGradient,  ///< CG preconditioned by the 3×3 diagonal blocks, warm-started at the initial guess
+    Amg,                ///< CG preconditioned by smoothed aggregation multigrid, warm-started
+    Auto,               ///< cholmod for small systems and tiny α, amg otherwise (falls back to cholmod)
 };
 
-/// "cholmod" or "cg"; throws dsreg::Error listing the choices otherwise.
+/// "cholmod", "cg", "amg" or "auto"; throws dsreg::Error listing the choices otherwise.
 SolverKind parse_solver_kind(const std::string& name);
 std::string solver_name(SolverKind kind);
 std::vector<std::string> solver_names();
 
 struct SolverOptions {
-    SolverKind kind = SolverKind::Cholmod;
-    double tolerance = 1e-10;   ///< iterative solvers: target relative residual ‖Rx − b‖/‖b‖
+    SolverKind kind = SolverKind::Auto;
+    /// Iterative solvers stop once ‖Rx − b‖ ≤ tolerance·‖b‖, or once the residual reaches
+    /// rounding level (‖Rx − b‖ ≤ 1e-15·(‖R‖∞‖x‖ + ‖b‖), which is what ends them when α is tiny).
+    /// With W0 = identity the error is then at most tolerance·‖p‖₂ (see above): 1e-10 keeps every
+    /// vertex within 1e-4 voxel of the exact solution for objects up to ~1000 voxels across.
+    double tolerance = 1e-10;
     int max_iterations = 20000;
 };
 
 struct SolveReport {
-    std::string solver;
+    std::string solver;            ///< the solver that produced x ("auto" names its choice)
+    std::string note;              ///< why auto chose it, or empty
     double relative_residual = 0;  ///< ‖R x − b‖ / ‖b‖ of the returned x
     int iterations = 0;            ///< 0 for direct solvers
     double factor_nonzeros = 0;    ///< entries of the Cholesky factor (direct solvers)
+    int multigrid_levels = 0;      ///< amg: levels of the hierarchy
+    double operator_complexity = 0;  ///< amg: stored entries of all levels / entries of R
 };
 
 /// Solves R x = b (R SPD, both triangles stored). `x` holds the initial guess on entry (used by

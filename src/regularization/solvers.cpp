@@ -1,18 +1,33 @@
 #include "dsreg/solvers.hpp"
 
 #include <Eigen/CholmodSupport>
-#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/Dense>
+#include <cstdio>
+#include <limits>
 
+#include "conjugate_gradient.hpp"
 #include "dsreg/error.hpp"
+#include "smoothed_aggregation.hpp"
 
 namespace dsreg {
 
 namespace {
 
+// auto: thresholds measured on goursat and spheres, see docs/solvers.md.
+constexpr Eigen::Index kAutoDirectMaxUnknowns = 10000;  ///< up to this CHOLMOD is as fast as amg (and exact)
+constexpr double kAutoMinDataWeight = 1e-6;  ///< below this α/diag, amg needs hundreds of iterations
+constexpr int kAutoAmgMaxIterations = 200;   ///< auto falls back to CHOLMOD past this
+
 double relative_residual(const Eigen::SparseMatrix<double>& R, const Eigen::VectorXd& b, const Eigen::VectorXd& x) {
     const double norm_b = b.norm();
-    const double norm_r = (R * x - b).norm();
+    const double norm_r = (detail::row_view(R) * x - b).norm();
     return norm_b > 0 ? norm_r / norm_b : norm_r;
+}
+
+std::string format_number(const char* format, double value) {
+    char text[64];
+    std::snprintf(text, sizeof text, format, value);
+    return text;
 }
 
 SolveReport solve_cholmod(const Eigen::SparseMatrix<double>& R, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
@@ -28,25 +43,95 @@ SolveReport solve_cholmod(const Eigen::SparseMatrix<double>& R, const Eigen::Vec
     return report;
 }
 
-SolveReport solve_conjugate_gradient(const Eigen::SparseMatrix<double>& R, const Eigen::VectorXd& b, Eigen::VectorXd& x,
-                                     const SolverOptions& options) {
-    // R is symmetric, so its column-major arrays are also its row-major arrays; row-major with
-    // Lower|Upper lets Eigen run the products on all cores.
-    const Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor>> rows(
-        R.rows(), R.cols(), R.nonZeros(), R.outerIndexPtr(), R.innerIndexPtr(), R.valuePtr());
-    Eigen::ConjugateGradient<Eigen::SparseMatrix<double, Eigen::RowMajor>, Eigen::Lower | Eigen::Upper> cg;
-    cg.setTolerance(options.tolerance);
-    cg.setMaxIterations(options.max_iterations);
-    cg.compute(rows);
-    const Eigen::VectorXd guess = x;
-    x = cg.solveWithGuess(b, guess);
+detail::CgStop stop_rule(const SolverOptions& options, int max_iterations) {
+    detail::CgStop stop;
+    stop.relative_residual = options.tolerance;
+    stop.max_iterations = max_iterations;
+    return stop;
+}
+
+Error not_converged(const std::string& solver, const SolverOptions& options, int iterations) {
+    return Error(solver + " did not reach the relative residual " + format_number("%.1e", options.tolerance) + " in " +
+                 std::to_string(iterations) + " iterations; use --solver cholmod");
+}
+
+/// CG with the inverse 3×3 diagonal blocks of R as preconditioner (block Jacobi).
+SolveReport solve_block_jacobi_cg(const Eigen::SparseMatrix<double>& R, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+                                  const SolverOptions& options) {
+    const detail::ScalarRows rows = detail::row_view(R);
+    std::vector<Eigen::Matrix3d> inverse = detail::diagonal_blocks(rows);
+    for (Eigen::Matrix3d& block : inverse) block = block.inverse().eval();
+    const detail::Preconditioner jacobi = [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) {
+        z.resize(r.size());
+#pragma omp parallel for schedule(static)
+        for (std::int64_t i = 0; i < std::int64_t(inverse.size()); ++i) z.segment<3>(3 * i) = inverse[std::size_t(i)] * r.segment<3>(3 * i);
+    };
+    const detail::CgResult cg =
+        detail::preconditioned_conjugate_gradient(rows, b, x, jacobi, stop_rule(options, options.max_iterations));
+    if (!cg.converged) throw not_converged("conjugate gradient", options, cg.iterations);
     SolveReport report;
     report.solver = "cg";
-    report.iterations = int(cg.iterations());
-    if (cg.info() != Eigen::Success)
-        throw Error("conjugate gradient did not reach the relative residual " + std::to_string(options.tolerance) + " in " +
-                    std::to_string(options.max_iterations) + " iterations (error " + std::to_string(cg.error()) +
-                    "); use --solver cholmod");
+    report.iterations = cg.iterations;
+    return report;
+}
+
+/// CG preconditioned by one smoothed aggregation V-cycle per iteration. Returns false (x
+/// unspecified) if the tolerance is not met within `max_iterations`.
+bool solve_amg(const Eigen::SparseMatrix<double>& R, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+               const SolverOptions& options, int max_iterations, SolveReport& report) {
+    const detail::SmoothedAggregation amg(R, detail::AmgSettings{});
+    const detail::Preconditioner vcycle = [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) { amg.apply(r, z); };
+    const detail::CgResult cg =
+        detail::preconditioned_conjugate_gradient(detail::row_view(R), b, x, vcycle, stop_rule(options, max_iterations));
+    report.solver = "amg";
+    report.iterations = cg.iterations;
+    report.multigrid_levels = amg.level_count();
+    report.operator_complexity = amg.operator_complexity();
+    return cg.converged;
+}
+
+/// min_i (R·t_d)_i / mean_i R_ii, with t_d the translations: for eq. (23) the numerator is
+/// α·min w0 (K annihilates translations), so this is the weight of the data term relative to the
+/// whole diagonal: the smaller it is, the more ill-conditioned R (and the slower any CG).
+double data_weight_ratio(const Eigen::SparseMatrix<double>& R) {
+    const detail::ScalarRows rows = detail::row_view(R);
+    double smallest = std::numeric_limits<double>::infinity(), diagonal = 0;
+#pragma omp parallel for schedule(static) reduction(min : smallest) reduction(+ : diagonal)
+    for (Eigen::Index i = 0; i < rows.rows(); ++i) {
+        double same_coordinate = 0;
+        for (int q = rows.outerIndexPtr()[i]; q < rows.outerIndexPtr()[i + 1]; ++q) {
+            const Eigen::Index j = rows.innerIndexPtr()[q];
+            if (j % 3 == i % 3) same_coordinate += rows.valuePtr()[q];
+            if (j == i) diagonal += rows.valuePtr()[q];
+        }
+        smallest = std::min(smallest, same_coordinate);
+    }
+    return rows.rows() > 0 && diagonal > 0 ? smallest / (diagonal / double(rows.rows())) : 0.0;
+}
+
+SolveReport solve_auto(const Eigen::SparseMatrix<double>& R, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+                       const SolverOptions& options) {
+    if (R.rows() <= kAutoDirectMaxUnknowns) {
+        SolveReport report = solve_cholmod(R, b, x);
+        report.note = "auto: small system";
+        return report;
+    }
+    const double ratio = data_weight_ratio(R);
+    if (ratio < kAutoMinDataWeight) {
+        SolveReport report = solve_cholmod(R, b, x);
+        report.note = "auto: data weight " + format_number("%.1e", ratio) + " of the diagonal is too small for amg";
+        return report;
+    }
+    const Eigen::VectorXd guess = x;
+    SolveReport report;
+    const int cap = std::min(options.max_iterations, kAutoAmgMaxIterations);
+    if (solve_amg(R, b, x, options, cap, report)) {
+        report.note = "auto: large system";
+        return report;
+    }
+    x = guess;
+    report = solve_cholmod(R, b, x);
+    report.note = "auto: amg did not converge in " + std::to_string(cap) + " iterations";
     return report;
 }
 
@@ -55,19 +140,42 @@ SolveReport solve_conjugate_gradient(const Eigen::SparseMatrix<double>& R, const
 SolverKind parse_solver_kind(const std::string& name) {
     if (name == "cholmod") return SolverKind::Cholmod;
     if (name == "cg") return SolverKind::ConjugateGradient;
-    throw Error("unknown solver '" + name + "' (choose cholmod or cg)");
+    if (name == "amg") return SolverKind::Amg;
+    if (name == "auto") return SolverKind::Auto;
+    throw Error("unknown solver '" + name + "' (choose cholmod, cg, amg or auto)");
 }
 
-std::string solver_name(SolverKind kind) { return kind == SolverKind::Cholmod ? "cholmod" : "cg"; }
+std::string solver_name(SolverKind kind) {
+    switch (kind) {
+        case SolverKind::Cholmod: return "cholmod";
+        case SolverKind::ConjugateGradient: return "cg";
+        case SolverKind::Amg: return "amg";
+        case SolverKind::Auto: return "auto";
+    }
+    return "auto";
+}
 
-std::vector<std::string> solver_names() { return {"cholmod", "cg"}; }
+std::vector<std::string> solver_names() { return {"cholmod", "auto", "amg", "cg"}; }
 
 SolveReport solve_spd(const Eigen::SparseMatrix<double>& R, const Eigen::VectorXd& b, Eigen::VectorXd& x,
                       const SolverOptions& options) {
     if (R.rows() != R.cols() || R.rows() != b.size()) throw Error("solve_spd: inconsistent system sizes");
     if (x.size() != b.size()) x = Eigen::VectorXd::Zero(b.size());
-    SolveReport report = options.kind == SolverKind::Cholmod ? solve_cholmod(R, b, x)
-                                                             : solve_conjugate_gradient(R, b, x, options);
+    if (!R.isCompressed()) {  // the iterative solvers read the compressed arrays directly
+        Eigen::SparseMatrix<double> compressed = R;
+        compressed.makeCompressed();
+        return solve_spd(compressed, b, x, options);
+    }
+    SolveReport report;
+    switch (options.kind) {
+        case SolverKind::Cholmod: report = solve_cholmod(R, b, x); break;
+        case SolverKind::ConjugateGradient: report = solve_block_jacobi_cg(R, b, x, options); break;
+        case SolverKind::Amg:
+            if (!solve_amg(R, b, x, options, options.max_iterations, report))
+                throw not_converged("amg", options, report.iterations);
+            break;
+        case SolverKind::Auto: report = solve_auto(R, b, x, options); break;
+    }
     report.relative_residual = relative_residual(R, b, x);
     return report;
 }

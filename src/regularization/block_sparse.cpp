@@ -1,0 +1,249 @@
+#include "block_sparse.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace dsreg::detail {
+
+namespace {
+
+/// Builds a block matrix row by row in parallel (Gustavson): `fill_row(i, block)` adds into
+/// `block(j)`, a zero-initialized 3×3 accumulator for column j of row i. Each thread fills a
+/// contiguous range of rows; the pieces are then concatenated in row order.
+template <class FillRow>
+BlockMatrix build_by_rows(std::int64_t rows, std::int64_t cols, FillRow fill_row) {
+    const int threads = rows >= kParallelMinRows ? omp_get_max_threads() : 1;
+    std::vector<std::vector<std::int32_t>> piece_columns(static_cast<std::size_t>(threads));
+    std::vector<std::vector<Eigen::Matrix3d>> piece_blocks(static_cast<std::size_t>(threads));
+    std::vector<std::int64_t> row_count(static_cast<std::size_t>(rows), 0);
+#pragma omp parallel num_threads(threads)
+    {
+        const int t = omp_get_thread_num(), nt = omp_get_num_threads();
+        const std::int64_t first = rows * t / nt, last = rows * (t + 1) / nt;
+        std::vector<std::int32_t> slot(static_cast<std::size_t>(cols), -1);
+        auto& columns = piece_columns[std::size_t(t)];
+        auto& blocks = piece_blocks[std::size_t(t)];
+        for (std::int64_t i = first; i < last; ++i) {
+            const std::size_t row_begin = columns.size();
+            const auto block = [&](std::int32_t j) -> Eigen::Matrix3d& {
+                std::int32_t& s = slot[std::size_t(j)];
+                if (s < 0) {
+                    s = std::int32_t(columns.size() - row_begin);
+                    columns.push_back(j);
+                    blocks.push_back(Eigen::Matrix3d::Zero());
+                }
+                return blocks[row_begin + std::size_t(s)];
+            };
+            fill_row(i, block);
+            for (std::size_t q = row_begin; q < columns.size(); ++q) slot[std::size_t(columns[q])] = -1;
+            row_count[std::size_t(i)] = std::int64_t(columns.size() - row_begin);
+        }
+    }
+    BlockMatrix out;
+    out.rows = rows;
+    out.cols = cols;
+    out.start.assign(std::size_t(rows + 1), 0);
+    for (std::int64_t i = 0; i < rows; ++i) out.start[std::size_t(i + 1)] = out.start[std::size_t(i)] + row_count[std::size_t(i)];
+    out.column.reserve(std::size_t(out.start.back()));
+    out.block.reserve(std::size_t(out.start.back()));
+    for (int t = 0; t < threads; ++t) {  // pieces hold consecutive row ranges, in thread order
+        out.column.insert(out.column.end(), piece_columns[std::size_t(t)].begin(), piece_columns[std::size_t(t)].end());
+        out.block.insert(out.block.end(), piece_blocks[std::size_t(t)].begin(), piece_blocks[std::size_t(t)].end());
+        std::vector<std::int32_t>().swap(piece_columns[std::size_t(t)]);
+        std::vector<Eigen::Matrix3d>().swap(piece_blocks[std::size_t(t)]);
+    }
+    return out;
+}
+
+template <class Visit>
+void for_each_scalar_entry(const ScalarRows& a, std::int64_t row, Visit visit) {
+    const int* inner = a.innerIndexPtr();
+    const double* value = a.valuePtr();
+    for (int q = a.outerIndexPtr()[row]; q < a.outerIndexPtr()[row + 1]; ++q) visit(inner[q], value[q]);
+}
+
+void finish_norms(std::vector<double>& scratch, std::int64_t i, BlockRowNorms& out) {
+    out.diagonal = 0;
+    std::size_t kept = 0;
+    for (std::size_t q = 0; q < out.neighbor.size(); ++q) {
+        const std::int32_t j = out.neighbor[q];
+        const double norm = std::sqrt(scratch[std::size_t(j)]);
+        scratch[std::size_t(j)] = 0;
+        if (j == i) {
+            out.diagonal = norm;
+        } else {
+            out.neighbor[kept] = j;
+            out.norm[kept] = norm;
+            ++kept;
+        }
+    }
+    out.neighbor.resize(kept);
+    out.norm.resize(kept);
+}
+
+}  // namespace
+
+ScalarRows row_view(const Eigen::SparseMatrix<double>& s) {
+    return ScalarRows(s.rows(), s.cols(), s.nonZeros(), s.outerIndexPtr(), s.innerIndexPtr(), s.valuePtr());
+}
+
+void BlockMatrix::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+    y.resize(3 * rows);
+#pragma omp parallel for schedule(static) if (rows >= kParallelMinRows)
+    for (std::int64_t i = 0; i < rows; ++i) {
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        for (std::int64_t q = start[std::size_t(i)]; q < start[std::size_t(i + 1)]; ++q)
+            sum.noalias() += block[std::size_t(q)] * x.segment<3>(3 * std::int64_t(column[std::size_t(q)]));
+        y.segment<3>(3 * i) = sum;
+    }
+}
+
+Eigen::SparseMatrix<double> BlockMatrix::to_scalar() const {
+    std::vector<Eigen::Triplet<double>> entries;
+    entries.reserve(9 * column.size());
+    for (std::int64_t i = 0; i < rows; ++i)
+        for (std::int64_t q = start[std::size_t(i)]; q < start[std::size_t(i + 1)]; ++q)
+            for (int r = 0; r < 3; ++r)
+                for (int c = 0; c < 3; ++c)
+                    entries.emplace_back(3 * i + r, 3 * std::int64_t(column[std::size_t(q)]) + c, block[std::size_t(q)](r, c));
+    Eigen::SparseMatrix<double> s(3 * rows, 3 * cols);
+    s.setFromTriplets(entries.begin(), entries.end());
+    return s;
+}
+
+BlockMatrix transpose(const BlockMatrix& a) {
+    BlockMatrix t;
+    t.rows = a.cols;
+    t.cols = a.rows;
+    t.start.assign(std::size_t(t.rows + 1), 0);
+    for (std::int32_t j : a.column) ++t.start[std::size_t(j) + 1];
+    for (std::int64_t j = 0; j < t.rows; ++j) t.start[std::size_t(j + 1)] += t.start[std::size_t(j)];
+    t.column.resize(a.column.size());
+    t.block.resize(a.block.size());
+    std::vector<std::int64_t> next(t.start.begin(), t.start.end() - 1);
+    for (std::int64_t i = 0; i < a.rows; ++i)
+        for (std::int64_t q = a.start[std::size_t(i)]; q < a.start[std::size_t(i + 1)]; ++q) {
+            const std::int64_t slot = next[std::size_t(a.column[std::size_t(q)])]++;
+            t.column[std::size_t(slot)] = std::int32_t(i);
+            t.block[std::size_t(slot)] = a.block[std::size_t(q)].transpose();
+        }
+    return t;
+}
+
+BlockMatrix multiply(const BlockMatrix& a, const BlockMatrix& b) {
+    return build_by_rows(a.rows, b.cols, [&](std::int64_t i, auto&& block) {
+        for (std::int64_t p = a.start[std::size_t(i)]; p < a.start[std::size_t(i + 1)]; ++p) {
+            const Eigen::Matrix3d& left = a.block[std::size_t(p)];
+            const std::int64_t k = a.column[std::size_t(p)];
+            for (std::int64_t q = b.start[std::size_t(k)]; q < b.start[std::size_t(k + 1)]; ++q)
+                block(b.column[std::size_t(q)]).noalias() += left * b.block[std::size_t(q)];
+        }
+    });
+}
+
+namespace {
+
+/// Rows of P: block (i, a) = −ω D_i⁻¹ (A_F T)(i, a), plus weight_i·I3 on the aggregate of i.
+/// `visit_row(i, add)` calls add(j, A_ij) for every block of row i, as a 3×3 matrix expression.
+template <class VisitRow>
+BlockMatrix build_prolongator(std::int64_t n, const std::vector<Eigen::Matrix3d>& inverse_diagonal, const StrengthGraph& strong,
+                              const std::vector<std::int32_t>& aggregate, const std::vector<double>& weight,
+                              std::int64_t aggregate_count, double omega, VisitRow visit_row) {
+    BlockMatrix p = build_by_rows(n, aggregate_count, [&](std::int64_t i, auto&& block) {
+        const std::int32_t own = aggregate[std::size_t(i)];
+        block(own);  // the aggregate of i is always present
+        const auto first = strong.neighbour.begin() + strong.start[std::size_t(i)];
+        const auto last = strong.neighbour.begin() + strong.start[std::size_t(i + 1)];
+        visit_row(i, [&](std::int64_t j, const auto& a_ij) {
+            if (j == i || std::find(first, last, std::int32_t(j)) != last)
+                block(aggregate[std::size_t(j)]) += weight[std::size_t(j)] * a_ij;
+            else  // weak: lumped into the diagonal block of A_F
+                block(own) += weight[std::size_t(i)] * a_ij;
+        });
+    });
+#pragma omp parallel for schedule(static) if (n >= kParallelMinRows)
+    for (std::int64_t i = 0; i < n; ++i)
+        for (std::int64_t q = p.start[std::size_t(i)]; q < p.start[std::size_t(i + 1)]; ++q) {
+            Eigen::Matrix3d& b = p.block[std::size_t(q)];
+            b = (-omega * inverse_diagonal[std::size_t(i)] * b).eval();
+            if (p.column[std::size_t(q)] == aggregate[std::size_t(i)]) b.diagonal().array() += weight[std::size_t(i)];
+        }
+    return p;
+}
+
+}  // namespace
+
+BlockMatrix smoothed_prolongator(const BlockMatrix& a, const std::vector<Eigen::Matrix3d>& inverse_diagonal,
+                                 const StrengthGraph& strong, const std::vector<std::int32_t>& aggregate,
+                                 const std::vector<double>& weight, std::int64_t aggregate_count, double omega) {
+    return build_prolongator(a.rows, inverse_diagonal, strong, aggregate, weight, aggregate_count, omega,
+                             [&](std::int64_t i, auto&& add) {
+                                 for (std::int64_t q = a.start[std::size_t(i)]; q < a.start[std::size_t(i + 1)]; ++q)
+                                     add(a.column[std::size_t(q)], a.block[std::size_t(q)]);
+                             });
+}
+
+BlockMatrix filtered_blocks(const ScalarRows& a, const StrengthGraph& strong) {
+    return build_by_rows(a.rows() / 3, a.rows() / 3, [&](std::int64_t i, auto&& block) {
+        const auto first = strong.neighbour.begin() + strong.start[std::size_t(i)];
+        const auto last = strong.neighbour.begin() + strong.start[std::size_t(i + 1)];
+        Eigen::Vector3d lumped = Eigen::Vector3d::Zero();
+        for (int r = 0; r < 3; ++r)
+            for_each_scalar_entry(a, 3 * i + r, [&](int col, double v) {
+                const std::int32_t j = col / 3;
+                if (j == i || std::find(first, last, j) != last) block(j)(r, col % 3) += v;
+                else lumped[r] += std::abs(v);
+            });
+        block(std::int32_t(i)).diagonal() += lumped;  // (references into the row die as it grows)
+    });
+}
+
+std::vector<Eigen::Matrix3d> diagonal_blocks(const ScalarRows& a) {
+    const std::int64_t n = a.rows() / 3;
+    std::vector<Eigen::Matrix3d> d(static_cast<std::size_t>(n), Eigen::Matrix3d::Zero());
+#pragma omp parallel for schedule(static) if (n >= kParallelMinRows)
+    for (std::int64_t i = 0; i < n; ++i)
+        for (int r = 0; r < 3; ++r)
+            for_each_scalar_entry(a, 3 * i + r, [&](int col, double v) {
+                if (col / 3 == i) d[std::size_t(i)](r, col % 3) = v;
+            });
+    return d;
+}
+
+std::vector<Eigen::Matrix3d> diagonal_blocks(const BlockMatrix& a) {
+    std::vector<Eigen::Matrix3d> d(static_cast<std::size_t>(a.rows), Eigen::Matrix3d::Zero());
+#pragma omp parallel for schedule(static) if (a.rows >= kParallelMinRows)
+    for (std::int64_t i = 0; i < a.rows; ++i)
+        for (std::int64_t q = a.start[std::size_t(i)]; q < a.start[std::size_t(i + 1)]; ++q)
+            if (a.column[std::size_t(q)] == i) d[std::size_t(i)] += a.block[std::size_t(q)];
+    return d;
+}
+
+void multiply_operator(const ScalarRows& a, const Eigen::VectorXd& x, Eigen::VectorXd& y) { y.noalias() = a * x; }
+
+void block_row_norms(const ScalarRows& a, std::int64_t i, std::vector<double>& scratch, BlockRowNorms& out) {
+    out.neighbor.clear();
+    for (int r = 0; r < 3; ++r)
+        for_each_scalar_entry(a, 3 * i + r, [&](int col, double v) {
+            const std::int32_t j = col / 3;
+            if (scratch[std::size_t(j)] == 0) out.neighbor.push_back(j);
+            scratch[std::size_t(j)] += v * v + 1e-300;  // stays non-zero once visited
+        });
+    out.norm.resize(out.neighbor.size());
+    finish_norms(scratch, i, out);
+}
+
+void block_row_norms(const BlockMatrix& a, std::int64_t i, std::vector<double>& scratch, BlockRowNorms& out) {
+    out.neighbor.clear();
+    for (std::int64_t q = a.start[std::size_t(i)]; q < a.start[std::size_t(i + 1)]; ++q) {
+        const std::int32_t j = a.column[std::size_t(q)];
+        if (scratch[std::size_t(j)] == 0) out.neighbor.push_back(j);
+        scratch[std::size_t(j)] += a.block[std::size_t(q)].squaredNorm() + 1e-300;
+    }
+    out.norm.resize(out.neighbor.size());
+    finish_norms(scratch, i, out);
+}
+
+}  // namespace dsreg::detail

@@ -1,0 +1,60 @@
+// dsreg — internal: smoothed aggregation algebraic multigrid (Vaněk, Mandel, Brezina 1996) for
+// the 3×3-block SPD regularization matrix, used as the preconditioner of conjugate gradients.
+//
+// Near-null space: the three rigid translations. The alignment and fairness terms of eq. (23)
+// annihilate them (they only see differences of positions), so on each aggregate of vertices
+// R acts on a translation like α W0: these are the smooth modes the smoother cannot reduce.
+// The finest level is R without its weak blocks (filtered_blocks: the fairness term's 2-ring,
+// lumped into the diagonal), which CG corrects for. Per level: strength graph on 3×3 block
+// norms, greedy aggregation, tentative prolongator T = translations per aggregate, smoothed
+// prolongator P = (I − ω D⁻¹A_F) T (A_F: weak blocks lumped), Galerkin coarse operator Pᵀ A P,
+// Chebyshev smoother on D⁻¹A (D = 3×3 block diagonal), λmax(D⁻¹A) bounded by Lanczos.
+// Coarsest level (≤ 400 vertices): CHOLMOD.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <memory>
+#include <vector>
+
+#include "block_sparse.hpp"
+
+namespace dsreg::detail {
+
+struct AmgSettings {
+    double strength_threshold = 0.08;  ///< block (i,j) is strong if ‖A_ij‖ ≥ θ √(‖A_ii‖ ‖A_jj‖)
+    int smoothing_degree = 2;          ///< Chebyshev degree of pre- and post-smoothing
+    double smoothing_range = 30;       ///< Chebyshev targets [λmax/range, λmax] of D⁻¹A
+    double prolongator_damping = 4.0 / 3.0;  ///< ω = damping / λmax(D⁻¹A)
+    std::int64_t coarsest_nodes = 400;       ///< factor the level directly at or below this size
+    int max_levels = 16;
+};
+
+class SmoothedAggregation {
+public:
+    /// Builds the hierarchy for R (symmetric, both triangles stored; must outlive this object).
+    SmoothedAggregation(const Eigen::SparseMatrix<double>& R, const AmgSettings& settings);
+    ~SmoothedAggregation();
+    SmoothedAggregation(const SmoothedAggregation&) = delete;
+    SmoothedAggregation& operator=(const SmoothedAggregation&) = delete;
+
+    /// z = M⁻¹ r: one symmetric V-cycle from a zero initial guess.
+    void apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const;
+
+    int level_count() const;
+    /// Σ over levels of the operator's stored scalar entries / entries of R.
+    double operator_complexity() const;
+
+private:
+    struct Level;
+    struct Coarsest;
+    void vcycle(std::size_t level, const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
+    void smooth(const Level& level, const Eigen::VectorXd& b, Eigen::VectorXd& x, bool zero_guess) const;
+
+    AmgSettings settings_;
+    ScalarRows fine_;
+    std::vector<std::unique_ptr<Level>> levels_;
+    std::unique_ptr<Coarsest> coarsest_;
+};
+
+}  // namespace dsreg::detail

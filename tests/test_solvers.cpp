@@ -1,0 +1,174 @@
+// Solvers of the regularization system R x = b (eq. 22–23) on real systems: digitized spheres and
+// balls, their digital surface, integral invariant normals. Every solver must agree with CHOLMOD
+// within 1e-4 voxel, with the paper's weights and with the tiny α of its Fig. 7.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "dsreg/error.hpp"
+#include "dsreg/implicit_shape.hpp"
+#include "dsreg/normals.hpp"
+#include "dsreg/regularization.hpp"
+#include "dsreg/solvers.hpp"
+#include "test_support.hpp"
+
+namespace dsreg {
+namespace {
+
+struct Problem {
+    std::string name;
+    double spacing = 1;  ///< voxel size, in the units of the positions
+    RegularizationSystem system;
+    Eigen::VectorXd initial;  ///< p, the warm start
+};
+
+Problem assemble(const std::string& name, const BinaryVolume& volume, double spacing, double radius, const RegularizationWeights& w) {
+    const DigitalSurface surface = extract_digital_surface(volume, Connectivity::TwentySix);
+    const PointMatrix normals = integral_invariant_normals(volume, surface, radius);
+    const VertexLinks links = vertex_links(surface.quads, surface.vertex_count());
+    Problem p;
+    p.name = name;
+    p.spacing = spacing;
+    p.system = assemble_regularization_system(surface.vertices, surface.quads, links, normals, w);
+    p.initial = flatten_points(surface.vertices);
+    return p;
+}
+
+/// The unit sphere digitized at step h, with the weights of the paper's Fig. 7 (α = 1e-5·h², γ = 0).
+Problem sphere_with_tiny_alpha(double h) {
+    const RegularizationWeights w{1e-5 * h * h, 1.0, 0.0, {}, {}};
+    return assemble("sphere1 h=" + std::to_string(h) + " tiny alpha", digitize(make_shape("sphere1"), h), h, 3 * h, w);
+}
+
+/// A ball of radius 9 voxels (spacing 1) with the paper's default weights.
+Problem ball_with_default_weights() {
+    return assemble("ball r=9", test::make_ball(22, 9.0, 10.5), 1.0, 3.0, RegularizationWeights{});
+}
+
+const std::vector<Problem>& problems() {
+    static const std::vector<Problem> all = {ball_with_default_weights(), sphere_with_tiny_alpha(1.0 / 6),
+                                             sphere_with_tiny_alpha(1.0 / 8)};
+    return all;
+}
+
+struct Solved {
+    Eigen::VectorXd x;
+    SolveReport report;
+};
+
+Solved solve_with(const Problem& p, SolverKind kind) {
+    SolverOptions options;
+    options.kind = kind;
+    Solved s{p.initial, {}};
+    s.report = solve_spd(p.system.matrix, p.system.rhs, s.x, options);
+    return s;
+}
+
+/// Each problem solved once by each solver, warm-started at p (shared by the tests below).
+const Solved& solution(std::size_t problem, SolverKind kind) {
+    static std::map<std::pair<std::size_t, SolverKind>, Solved> cache;
+    const auto key = std::make_pair(problem, kind);
+    auto it = cache.find(key);
+    if (it == cache.end()) it = cache.emplace(key, solve_with(problems()[problem], kind)).first;
+    return it->second;
+}
+
+/// Largest distance between corresponding vertices, in voxels.
+double max_vertex_distance_voxels(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double spacing) {
+    double largest = 0;
+    for (Eigen::Index i = 0; i < a.size() / 3; ++i) largest = std::max(largest, (a.segment<3>(3 * i) - b.segment<3>(3 * i)).norm());
+    return largest / spacing;
+}
+
+TEST(Solvers, NamesRoundTripAndUnknownNamesAreRejected) {
+    for (const std::string& name : solver_names()) EXPECT_EQ(solver_name(parse_solver_kind(name)), name);
+    EXPECT_EQ(solver_names().size(), 4u);
+    EXPECT_THROW(parse_solver_kind("lu"), Error);
+    EXPECT_EQ(SolverOptions{}.kind, SolverKind::Auto);
+}
+
+TEST(Solvers, EverySolverMatchesCholmodWithinATenThousandthOfAVoxel) {
+    for (std::size_t i = 0; i < problems().size(); ++i) {
+        const Problem& p = problems()[i];
+        const Solved& reference = solution(i, SolverKind::Cholmod);
+        for (SolverKind kind : {SolverKind::Amg, SolverKind::ConjugateGradient, SolverKind::Auto}) {
+            const Solved& s = solution(i, kind);
+            EXPECT_LE(max_vertex_distance_voxels(s.x, reference.x, p.spacing), 1e-4) << p.name << ", " << solver_name(kind);
+        }
+    }
+}
+
+TEST(Solvers, ReportedResidualIsTheResidualOfTheAnswer) {
+    for (std::size_t i = 0; i < problems().size(); ++i)
+        for (const std::string& name : solver_names()) {
+            const Problem& p = problems()[i];
+            const Solved& s = solution(i, parse_solver_kind(name));
+            const double residual = (p.system.matrix * s.x - p.system.rhs).norm() / p.system.rhs.norm();
+            EXPECT_NEAR(s.report.relative_residual, residual, 1e-6 * residual + 1e-300) << p.name << ", " << name;
+            EXPECT_TRUE(std::isfinite(s.report.relative_residual));
+        }
+}
+
+TEST(Solvers, IterativeSolversReportTheirWork) {
+    const Solved& amg = solution(0, SolverKind::Amg);
+    EXPECT_EQ(amg.report.solver, "amg");
+    EXPECT_GT(amg.report.iterations, 0);
+    EXPECT_GE(amg.report.multigrid_levels, 2) << "the ball is large enough for a coarse level";
+    EXPECT_GT(amg.report.operator_complexity, 0.5);  // the filtered fine level is lighter than R
+    EXPECT_LT(amg.report.operator_complexity, 3.0);
+    EXPECT_LE(amg.report.relative_residual, SolverOptions{}.tolerance * 1.01);
+    const Solved& cg = solution(0, SolverKind::ConjugateGradient);
+    EXPECT_EQ(cg.report.solver, "cg");
+    EXPECT_GT(cg.report.iterations, amg.report.iterations);
+    const Solved& cholmod = solution(0, SolverKind::Cholmod);
+    EXPECT_EQ(cholmod.report.iterations, 0);
+    EXPECT_GT(cholmod.report.factor_nonzeros, 0);
+}
+
+TEST(Solvers, AutoPicksARealSolverAndSaysWhy) {
+    for (std::size_t i = 0; i < problems().size(); ++i) {
+        const Solved& s = solution(i, SolverKind::Auto);
+        EXPECT_TRUE(s.report.solver == "cholmod" || s.report.solver == "amg") << s.report.solver;
+        EXPECT_FALSE(s.report.note.empty());
+    }
+}
+
+TEST(Solvers, WarmStartAtTheSolutionNeedsNoIteration) {
+    const Problem& p = problems().front();
+    Eigen::VectorXd exact = solution(0, SolverKind::Cholmod).x;
+    SolverOptions options;
+    options.kind = SolverKind::Amg;
+    options.tolerance = 1e-8;
+    const SolveReport r = solve_spd(p.system.matrix, p.system.rhs, exact, options);
+    EXPECT_EQ(r.iterations, 0);
+}
+
+TEST(Solvers, IterativeSolversThrowWhenTheyCannotConverge) {
+    const Problem& p = problems().front();
+    SolverOptions options;
+    options.kind = SolverKind::ConjugateGradient;
+    options.max_iterations = 2;
+    Eigen::VectorXd x = p.initial;
+    EXPECT_THROW(solve_spd(p.system.matrix, p.system.rhs, x, options), Error);
+}
+
+TEST(Solvers, IndefiniteMatricesAreRejected) {
+    // I + 2(e0 e3ᵀ + e3 e0ᵀ) has the eigenvalue −1 along e0 − e3, which b points along.
+    Eigen::SparseMatrix<double> R(6, 6);
+    for (int i = 0; i < 6; ++i) R.insert(i, i) = 1.0;
+    R.insert(0, 3) = 2.0;
+    R.insert(3, 0) = 2.0;
+    Eigen::VectorXd b = Eigen::VectorXd::Zero(6);
+    b[0] = 1;
+    b[3] = -1;
+    for (const std::string& name : solver_names()) {
+        SolverOptions options;
+        options.kind = parse_solver_kind(name);
+        Eigen::VectorXd x = Eigen::VectorXd::Zero(6);
+        EXPECT_THROW(solve_spd(R, b, x, options), Error) << name;
+    }
+}
+
+}  // namespace
+}  // namespace dsreg
