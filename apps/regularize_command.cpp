@@ -5,16 +5,17 @@
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
-#include <optional>
 #include <sstream>
 
 #include "dsreg/atomic_file.hpp"
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/mesh_io.hpp"
-#include "dsreg/normals.hpp"
+#include "dsreg/normals_file.hpp"
 #include "dsreg/regularization.hpp"
+#include "normal_field.hpp"
 #include "output_paths.hpp"
+#include "regularization_options.hpp"
 #include "stage_clock.hpp"
 #include "volume_source.hpp"
 
@@ -25,12 +26,12 @@ namespace {
 struct RegularizeOptions {
     VolumeSourceOptions source;
     int connectivity = 26;
-    std::string normals = "ii";
-    std::optional<double> radius;
+    NormalFieldOptions normals;
     double alpha = 1e-3, beta = 1.0, gamma = 1e-2;
     std::string solver = "cholmod";
     std::string output, input_mesh, report;
     bool triangulate = false, quiet = false, verbose = false;
+    ExtensionOptions extensions;  ///< --clamp, --metric, local weight maps
 };
 
 std::string format(const char* pattern, double value) {
@@ -39,12 +40,15 @@ std::string format(const char* pattern, double value) {
     return text;
 }
 
-PolygonMesh make_mesh(const DigitalSurface& surface, const PointMatrix& positions, const PointMatrix& normals,
+/// The output mesh: quads (or triangles) with the field u per face and, after AT, the feature
+/// map v per vertex ("v" in PLY).
+PolygonMesh make_mesh(const DigitalSurface& surface, const PointMatrix& positions, const NormalField& field,
                       bool triangulate) {
     PolygonMesh mesh;
     mesh.vertices = positions;
     mesh.faces = surface.quads;
-    mesh.face_normals = normals;
+    mesh.face_normals = field.normals;
+    if (field.at) mesh.vertex_scalars.emplace_back("v", field.at->features);
     return triangulate ? triangulate_shorter_diagonal(mesh) : mesh;
 }
 
@@ -52,26 +56,66 @@ nlohmann::json energy_json(const EnergyTerms& e, const RegularizationWeights& w)
     return {{"data", e.data}, {"alignment", e.alignment}, {"fairness", e.fairness}, {"total", e.total(w)}};
 }
 
-PointMatrix estimate_normals(const std::string& kind, const LoadedVolume& loaded, const DigitalSurface& surface,
-                            double radius) {
-    if (kind == "ii") return integral_invariant_normals(loaded.volume, surface, radius);
-    if (kind == "exact") return exact_normals(*loaded.shape, surface);
-    return trivial_normals(surface);
-}
-
-void check_options(const RegularizeOptions& o) {
+void check_options(RegularizeOptions& o) {
     check_mesh_output_path("-o", o.output);
     if (!o.input_mesh.empty()) check_mesh_output_path("--input-mesh", o.input_mesh);
     if (!o.report.empty()) check_output_folder("--report", o.report);
-    if (o.normals == "exact" && o.source.shape.empty())
-        throw Error("--normals exact needs an implicit --shape (the true normals are unknown for a file)");
-    if (o.radius && (!(*o.radius > 0) || !std::isfinite(*o.radius))) throw Error("--radius must be positive");
+    check_normal_field_options(o.normals, !o.source.shape.empty());
     parse_solver_kind(o.solver);
     RegularizationWeights weights{o.alpha, o.beta, o.gamma, {}, {}};
     validate_weights(weights, 0, 0);
+    check_regularization_extension_options(o.extensions);
 }
 
-void run(const RegularizeOptions& o) {
+void write_outputs(const RegularizeOptions& o, const DigitalSurface& surface, const NormalField& field,
+                   const RegularizationResult& result) {
+    write_mesh(o.output, make_mesh(surface, result.positions, field, o.triangulate));
+    if (!o.input_mesh.empty()) write_mesh(o.input_mesh, make_mesh(surface, surface.vertices, field, o.triangulate));
+    if (!o.normals.export_path.empty())
+        write_normals_file(o.normals.export_path, surface, field.normals, field.description);
+    write_feature_lines(o.normals, field, surface, result.positions);
+}
+
+nlohmann::json make_report(const RegularizeOptions& o, const LoadedVolume& loaded, std::int64_t object_voxels,
+                           const DigitalSurface& surface, const NormalField& field, const RegularizationResult& result,
+                           const RegularizationWeights& weights, const StageClock& clock) {
+    nlohmann::json report;
+    report["input"] = loaded.description;
+    report["grid"] = {{"dims", loaded.volume.grid.dims},
+                      {"spacing", {loaded.volume.grid.spacing.x(), loaded.volume.grid.spacing.y(), loaded.volume.grid.spacing.z()}},
+                      {"origin", {loaded.volume.grid.origin.x(), loaded.volume.grid.origin.y(), loaded.volume.grid.origin.z()}}};
+    report["counts"] = {{"voxels", loaded.volume.grid.voxel_count()},
+                        {"object_voxels", object_voxels},
+                        {"surfels", surface.face_count()},
+                        {"vertices", surface.vertex_count()},
+                        {"components", surface.component_count},
+                        {"split_pointels", surface.split_pointel_count},
+                        {"euler_characteristics", component_euler_characteristics(surface)}};
+    report["parameters"] = {{"alpha", o.alpha}, {"beta", o.beta}, {"gamma", o.gamma},
+                            {"connectivity", o.connectivity}, {"normals", o.normals.kind},
+                            {"normals_input", field.input},
+                            {"radius", field.radius ? nlohmann::json(*field.radius) : nlohmann::json(nullptr)},
+                            {"solver", result.solve.solver}, {"triangulate", o.triangulate}};
+    if (field.at) report["at"] = at_report(o.normals, field, surface);
+    report["solve"] = {{"relative_residual", result.solve.relative_residual},
+                       {"iterations", result.solve.iterations},
+                       {"factor_nonzeros", result.solve.factor_nonzeros},
+                       {"unknowns", 3 * surface.vertex_count()}};
+    report["energy_before"] = energy_json(result.energy_before, weights);
+    report["energy_after"] = energy_json(result.energy_after, weights);
+    nlohmann::json stages = nlohmann::json::object();
+    for (const auto& [name, seconds] : clock.stage_seconds()) stages[name] = seconds;
+    stages["assembly"] = result.assembly_seconds;
+    stages["solve"] = result.solve_seconds;
+    report["seconds"] = stages;
+    report["total_seconds"] = clock.total_seconds();
+    report["peak_memory_bytes"] = peak_memory_bytes();
+    report["outputs"] = {{"mesh", o.output}, {"input_mesh", o.input_mesh},
+                         {"normals", o.normals.export_path}, {"features", o.normals.features_path}};
+    return report;
+}
+
+void run(RegularizeOptions& o) {
     check_options(o);
     const bool progress = !o.quiet && (o.verbose || isatty(STDERR_FILENO));
     StageClock clock(progress);
@@ -87,54 +131,25 @@ void run(const RegularizeOptions& o) {
     clock.finish(std::to_string(surface.face_count()) + " surfels, " + std::to_string(surface.vertex_count()) +
                  " vertices, " + std::to_string(surface.component_count) + " components");
 
-    clock.start("normals");
-    const double radius = o.radius ? *o.radius : default_ii_radius(loaded);
-    const PointMatrix normals = estimate_normals(o.normals, loaded, surface, radius);
-    clock.finish(o.normals == "ii" ? "integral invariants, r = " + format("%g", radius) : o.normals);
+    const NormalField field = compute_normal_field(o.normals, loaded, surface, clock);
 
     clock.start("regularize");
-    const RegularizationWeights weights{o.alpha, o.beta, o.gamma, {}, {}};
+    RegularizationWeights weights{o.alpha, o.beta, o.gamma, {}, {}};
+    apply_regularization_extensions(o.extensions, o.source, surface, field.normals, weights);
     SolverOptions solver;
     solver.kind = parse_solver_kind(o.solver);
-    const RegularizationResult result = regularize(surface, normals, weights, solver);
+    nlohmann::json extension_report;
+    const RegularizationResult result =
+        run_regularization(o.extensions, loaded.volume, surface, field.normals, weights, solver, extension_report);
     clock.finish(result.solve.solver + ", relative residual " + format("%.2e", result.solve.relative_residual));
 
     clock.start("write");
-    write_mesh(o.output, make_mesh(surface, result.positions, normals, o.triangulate));
-    if (!o.input_mesh.empty()) write_mesh(o.input_mesh, make_mesh(surface, surface.vertices, normals, o.triangulate));
+    write_outputs(o, surface, field, result);
     clock.finish(o.output);
 
     if (!o.report.empty()) {
-        nlohmann::json report;
-        report["input"] = loaded.description;
-        report["grid"] = {{"dims", loaded.volume.grid.dims},
-                          {"spacing", {loaded.volume.grid.spacing.x(), loaded.volume.grid.spacing.y(), loaded.volume.grid.spacing.z()}},
-                          {"origin", {loaded.volume.grid.origin.x(), loaded.volume.grid.origin.y(), loaded.volume.grid.origin.z()}}};
-        report["counts"] = {{"voxels", loaded.volume.grid.voxel_count()},
-                            {"object_voxels", object_voxels},
-                            {"surfels", surface.face_count()},
-                            {"vertices", surface.vertex_count()},
-                            {"components", surface.component_count},
-                            {"split_pointels", surface.split_pointel_count},
-                            {"euler_characteristics", component_euler_characteristics(surface)}};
-        report["parameters"] = {{"alpha", o.alpha}, {"beta", o.beta}, {"gamma", o.gamma},
-                                {"connectivity", o.connectivity}, {"normals", o.normals},
-                                {"radius", o.normals == "ii" ? nlohmann::json(radius) : nlohmann::json(nullptr)},
-                                {"solver", result.solve.solver}, {"triangulate", o.triangulate}};
-        report["solve"] = {{"relative_residual", result.solve.relative_residual},
-                           {"iterations", result.solve.iterations},
-                           {"factor_nonzeros", result.solve.factor_nonzeros},
-                           {"unknowns", 3 * surface.vertex_count()}};
-        report["energy_before"] = energy_json(result.energy_before, weights);
-        report["energy_after"] = energy_json(result.energy_after, weights);
-        nlohmann::json stages = nlohmann::json::object();
-        for (const auto& [name, seconds] : clock.stage_seconds()) stages[name] = seconds;
-        stages["assembly"] = result.assembly_seconds;
-        stages["solve"] = result.solve_seconds;
-        report["seconds"] = stages;
-        report["total_seconds"] = clock.total_seconds();
-        report["peak_memory_bytes"] = peak_memory_bytes();
-        report["outputs"] = {{"mesh", o.output}, {"input_mesh", o.input_mesh}};
+        nlohmann::json report = make_report(o, loaded, object_voxels, surface, field, result, weights, clock);
+        report.update(extension_report);
         const std::string text = report.dump(2) + "\n";
         write_file_atomically(o.report, [&](std::ostream& out) { out << text; });
     }
@@ -145,7 +160,11 @@ void run(const RegularizeOptions& o) {
              << " vertices, " << surface.component_count << (surface.component_count == 1 ? " component" : " components")
              << "; energy " << format("%.4g", result.energy_before.total(weights)) << " -> "
              << format("%.4g", result.energy_after.total(weights)) << "; " << result.solve.solver << " residual "
-             << format("%.1e", result.solve.relative_residual) << "; " << format("%.2f", clock.total_seconds()) << " s, "
+             << format("%.1e", result.solve.relative_residual);
+        if (field.at)
+            line << "; Ambrosio-Tortorelli " << field.at->total_rounds() << " rounds, "
+                 << (field.at->features.array() < o.normals.feature_threshold).count() << " feature vertices";
+        line << "; " << format("%.2f", clock.total_seconds()) << " s, "
              << human_bytes(peak_memory_bytes()) << " peak -> " << o.output;
         std::cerr << line.str() << '\n';
     }
@@ -162,13 +181,8 @@ void add_regularize_command(CLI::App& app) {
                     "Object connectivity where voxels touch by an edge: 6 keeps them apart, 26 joins them")
         ->check(CLI::IsMember({6, 26}))
         ->capture_default_str();
-    cmd->add_option("--normals", options->normals,
-                    "Input normal field: ii (integral invariants), trivial (voxel faces), or exact (true normals of "
-                    "a --shape at the closest point of each face centre)")
-        ->check(CLI::IsMember({"ii", "trivial", "exact"}))
-        ->capture_default_str();
-    cmd->add_option("--radius", options->radius,
-                    "Integral invariant radius, physical units (default: 3 voxels for files, 3·h^(1/3) for --shape)");
+    add_normal_field_options(*cmd, options->normals);
+    add_regularization_extension_options(*cmd, options->extensions);
     cmd->add_option("--alpha", options->alpha, "Weight of data attachment (> 0)")->capture_default_str();
     cmd->add_option("--beta", options->beta, "Weight of normal alignment (>= 0)")->capture_default_str();
     cmd->add_option("--gamma", options->gamma, "Weight of fairness (>= 0)")->capture_default_str();

@@ -59,6 +59,53 @@ printf 'X: 4\nY: 4\nZ: 4\nVersion: 2\n.\n' >"$work/empty.vol"
 head -c 64 /dev/zero >>"$work/empty.vol"
 expect_error "empty object" "empty" regularize "$work/empty.vol" -o "$work/out.obj"
 
+# Piecewise-smooth normals (Ambrosio-Tortorelli): feature map in the PLY, feature lines, report.
+cube="x^20+y^20+z^20-1"
+"$DSREG" regularize --shape "$cube" --box 1.5 --h 0.1 --radius 0.3 --normals at -o "$work/at.ply" \
+    --features "$work/features.obj" --report "$work/at.json" --export-normals "$work/at.normals" -q
+check "at run exits 0" test $? -eq 0
+check "at mesh has the feature map v" grep -aq "property float v" "$work/at.ply"
+check "feature lines are OBJ polylines" grep -q "^l [0-9]* [0-9]*" "$work/features.obj"
+check "feature lines have vertices" grep -q "^v " "$work/features.obj"
+check "report has an at section" grep -q '"at": {' "$work/at.json"
+check "report has the rounds per epsilon" grep -q '"rounds"' "$work/at.json"
+check "exported normals have one line per surfel" test "$(grep -vc '^#' "$work/at.normals")" -eq \
+    "$(grep -o '"surfels": [0-9]*' "$work/at.json" | grep -o '[0-9]*$')"
+verbose=$("$DSREG" regularize --shape "$cube" --box 1.5 --h 0.2 --normals at -o "$work/v.obj" -v 2>&1)
+check "verbose stage line of at" grep -q "at .*rounds" <<<"$verbose"
+
+# Normals exported then imported give the same regularized mesh.
+"$DSREG" regularize --shape "$cube" --box 1.5 --h 0.1 --normals-file "$work/at.normals" -o "$work/again.ply" -q
+check "imported normals run exits 0" test $? -eq 0
+"$DSREG" regularize --shape "$cube" --box 1.5 --h 0.1 --radius 0.3 --normals at -o "$work/at.obj" -q
+"$DSREG" regularize --shape "$cube" --box 1.5 --h 0.1 --normals-file "$work/at.normals" -o "$work/again.obj" -q
+check "round trip of normals gives the same mesh" cmp -s "$work/at.obj" "$work/again.obj"
+"$DSREG" regularize --shape "$cube" --box 1.5 --h 0.1 --normals at --normals-file "$work/at.normals" -o "$work/at2.obj" -q
+check "at of a file field" test -s "$work/at2.obj"
+"$DSREG" regularize --shape sphere9 --h 1 --normals ctrivial --radius 2.5 -o "$work/ct.obj" -q
+check "convolved trivial normals" test -s "$work/ct.obj"
+
+# Broken normals files and inconsistent options are rejected before any output is written.
+grep -v '^#' "$work/at.normals" | tail -n +2 >"$work/missing.normals"
+expect_error "normals file missing a surfel" "missing.normals" regularize --shape "$cube" --box 1.5 --h 0.1 \
+    --normals-file "$work/missing.normals" -o "$work/out.obj"
+sed '8s/ [^ ]*$/ nan/' "$work/at.normals" >"$work/nan.normals"
+expect_error "normals file with a NaN" "nan.normals:8" regularize --shape "$cube" --box 1.5 --h 0.1 \
+    --normals-file "$work/nan.normals" -o "$work/out.obj"
+expect_error "absent normals file" "absent.normals" regularize --shape sphere1 --h 0.25 \
+    --normals-file "$work/absent.normals" -o "$work/out.obj"
+expect_error "normals file with --normals ii" "--normals-file" regularize --shape sphere1 --h 0.25 --normals ii \
+    --normals-file "$work/at.normals" -o "$work/out.obj"
+expect_error "at option without at" "--at-lambda" regularize --shape sphere1 --h 0.25 --at-lambda 1 -o "$work/out.obj"
+expect_error "epsilons upside down" "--at-eps" regularize --shape sphere1 --h 0.25 --normals at --at-eps 0.25:2 \
+    -o "$work/out.obj"
+expect_error "epsilon not a number" "--at-eps" regularize --shape sphere1 --h 0.25 --normals at --at-eps 2:x \
+    -o "$work/out.obj"
+expect_error "epsilon ratio" "--at-eps-ratio" regularize --shape sphere1 --h 0.25 --normals at --at-eps-ratio 0.5 \
+    -o "$work/out.obj"
+expect_error "features not obj" "--features" regularize --shape sphere1 --h 0.25 --normals at \
+    --features "$work/out.ply" -o "$work/out.obj"
+
 # A failed run does not touch an existing output.
 echo "precious" >"$work/keep.obj"
 "$DSREG" regularize "$work/short.vol" -o "$work/keep.obj" 2>/dev/null
