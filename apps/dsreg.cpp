@@ -3,6 +3,8 @@
 #include <iostream>
 
 #include "dsreg/error.hpp"
+#include "convergence_command.hpp"
+#include "eval_command.hpp"
 #include "regularize_command.hpp"
 
 int main(int argc, char** argv) {
@@ -10,6 +12,8 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     app.set_version_flag("--version", std::string("dsreg ") + DSREG_VERSION);
     dsreg::cli::add_regularize_command(app);
+    dsreg::cli::add_eval_command(app);
+    dsreg::cli::add_convergence_command(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

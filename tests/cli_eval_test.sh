@@ -1,0 +1,117 @@
+#!/usr/bin/env bash
+# End-to-end checks of `dsreg eval` and `dsreg convergence`: outputs, JSON keys, CSV columns,
+# exit codes, error messages, and that a failed run leaves no output behind.
+set -u
+: "${DSREG:?set DSREG to the dsreg executable}"
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+failures=0
+passes=0
+
+check() {  # check NAME COMMAND... : the command must succeed
+    local name=$1; shift
+    if "$@"; then passes=$((passes + 1)); else echo "FAIL: $name"; failures=$((failures + 1)); fi
+}
+
+expect_error() {  # expect_error NAME TEXT ARGS... : dsreg ARGS fails, mentions TEXT, leaves no $work/out*
+    local name=$1 text=$2; shift 2
+    rm -rf "$work"/out*
+    local err
+    err=$("$DSREG" "$@" 2>&1 >/dev/null)
+    local code=$?
+    if [[ $code -eq 0 ]]; then echo "FAIL: $name: exit code 0"; failures=$((failures + 1)); return; fi
+    if [[ $err != *"$text"* ]]; then echo "FAIL: $name: message '$err' lacks '$text'"; failures=$((failures + 1)); return; fi
+    if compgen -G "$work/out*" >/dev/null || compgen -G "$work/.out*" >/dev/null; then
+        echo "FAIL: $name: output left behind"; failures=$((failures + 1)); return
+    fi
+    passes=$((passes + 1))
+}
+
+# --- eval ------------------------------------------------------------------------------------
+"$DSREG" regularize --shape sphere1 --h 0.1 --normals exact -o "$work/s.obj" --input-mesh "$work/digital.off" -q
+check "regularize for eval" test -s "$work/s.obj"
+
+table=$("$DSREG" eval "$work/s.obj" --shape sphere1 --h 0.1)
+check "eval exits 0" test $? -eq 0
+check "table has vertex distance" grep -q "vertex distance / h" <<<"$table"
+check "table has normal angle" grep -q "normal angle" <<<"$table"
+check "table has voxel classification" grep -q "voxel centres correct" <<<"$table"
+
+json=$("$DSREG" eval "$work/s.obj" --shape sphere1 --h 0.1 --json)
+for key in vertex_distance vertex_distance_h normal_angle_deg p95 relative_volume_error voxel_classification \
+    triangle_min_angle_deg '"l2"' '"linf"' '"mean"' '"share"' '"correct"' '"total"' '"min"'; do
+    check "json has $key" grep -q "$key" <<<"$json"
+done
+check "json is one object" test "$(head -c 1 <<<"$json")" = "{"
+json_no_h=$("$DSREG" eval "$work/s.obj" --shape sphere1 --json)
+check "no units of h without --h" test -z "$(grep vertex_distance_h <<<"$json_no_h")"
+check "voxel classification uses the default h" grep -q '"voxel_classification"' <<<"$json_no_h"
+
+# The digital surface classifies every voxel centre of its own digitization correctly, and all
+# its vertices are within sqrt(3)/2 h of the sphere.
+json_digital=$("$DSREG" eval "$work/digital.off" --shape sphere1 --h 0.1 --json)
+check "digital surface: 100% of voxels" grep -q '"share": 1.0' <<<"$json_digital"
+linf_h=$(grep -A4 '"vertex_distance_h"' <<<"$json_digital" | grep '"linf"' | grep -o '[0-9.e-]*,\?$' | tr -d ,)
+check "digital surface within sqrt(3)/2 h" awk -v x="$linf_h" 'BEGIN { exit !(x > 0 && x <= 0.8661) }'
+
+# Other formats, including a mesh written as triangles.
+"$DSREG" regularize --shape goursat --h 0.5 -o "$work/g.stl" -q
+"$DSREG" regularize --shape goursat --h 0.5 -o "$work/g.ply" -q
+stl_json=$("$DSREG" eval "$work/g.stl" --shape goursat --h 0.5 --json)
+check "eval reads STL (triangles)" grep -q '"triangle_min_angle_deg"' <<<"$stl_json"
+ply_json=$("$DSREG" eval "$work/g.ply" --shape goursat --h 0.5 --json)
+check "eval reads PLY (quads)" grep -q '"normal_angle_deg"' <<<"$ply_json"
+
+# A tilted plane: box walls are left out of the distance statistics.
+"$DSREG" regularize --shape "0.408248290463863*x+0.577350269189626*y+0.707106781186548*z-0.01" --box 1 --h 0.1 \
+    --gamma 0 --alpha 1e-7 -o "$work/plane.obj" -q
+plane=$("$DSREG" eval "$work/plane.obj" --shape plane --h 0.1)
+check "plane: walls left out" grep -q "clipped box face left out" <<<"$plane"
+
+# --- convergence -----------------------------------------------------------------------------
+summary=$("$DSREG" convergence --shape sphere1 --h 0.2:0.1:3 --out "$work/conv/nested" 2>"$work/progress.txt")
+check "convergence exits 0" test $? -eq 0
+check "creates the nested folder" test -d "$work/conv/nested"
+csv="$work/conv/nested/convergence.csv"
+check "csv written" test -s "$csv"
+header=$(head -n 1 "$csv")
+for column in h faces normal_l2 normal_linf p_l2 p_linf pstar_l2 pstar_linf; do
+    check "csv has column $column" grep -q "\(^\|,\)$column\(,\|$\)" <<<"$header"
+done
+check "csv has one row per h" test "$(wc -l <"$csv")" -eq 4
+check "first row is the largest h" test "$(sed -n 2p "$csv" | cut -d, -f1)" = "0.2"
+check "svg written" grep -q "^<svg" "$work/conv/nested/convergence.svg"
+check "svg closed" grep -q "</svg>" "$work/conv/nested/convergence.svg"
+check "summary has slopes" grep -q "slope" <<<"$summary"
+check "summary compares p* and p" grep -q "p\* closer to the surface than p" <<<"$summary"
+check "progress per h on stderr" test "$(grep -c '^convergence: \[' "$work/progress.txt")" -eq 3
+"$DSREG" convergence --shape plane --h 0.2:0.1:2 --out "$work/conv-plane" -q >/dev/null
+check "plane convergence" test "$(wc -l <"$work/conv-plane/convergence.csv")" -eq 3
+"$DSREG" convergence --shape sphere1 --h 0.2:0.15:2 --normals ii --radius-k 2 --alpha-k 1e-4 --gamma 0.001 \
+    --out "$work/conv-ii" -q >/dev/null
+check "ii convergence" grep -q "^0.2," "$work/conv-ii/convergence.csv"
+
+# --- errors: message names the culprit, non-zero exit, nothing written -------------------------
+expect_error "missing mesh" "nothing.obj" eval "$work/nothing.obj" --shape sphere1
+printf 'v 0 0 0\nf 1 2 3\n' >"$work/broken.obj"
+expect_error "malformed mesh" "broken.obj" eval "$work/broken.obj" --shape sphere1
+expect_error "eval unknown shape" "blob" eval "$work/s.obj" --shape blob
+expect_error "eval negative h" "--h" eval "$work/s.obj" --shape sphere1 --h -0.1
+expect_error "range MAX < MIN" "MAX" convergence --shape sphere1 --h 0.1:0.2:3 --out "$work/out"
+expect_error "range without COUNT" "MAX:MIN:COUNT" convergence --shape sphere1 --h 0.2:0.1 --out "$work/out"
+expect_error "range not numbers" "not a number" convergence --shape sphere1 --h a:0.1:3 --out "$work/out"
+expect_error "range COUNT 1" "COUNT" convergence --shape sphere1 --h 0.2:0.1:1 --out "$work/out"
+expect_error "convergence unknown shape" "blob" convergence --shape blob --h 0.2:0.1:2 --out "$work/out"
+expect_error "radius k zero" "radius-k" convergence --shape sphere1 --h 0.2:0.1:2 --normals ii --radius-k 0 --out "$work/out"
+expect_error "alpha k zero" "alpha" convergence --shape sphere1 --h 0.2:0.1:2 --alpha-k 0 --out "$work/out"
+expect_error "failure during the run" "region" convergence --shape plane --h 0.2:0.1:2 --wall-margin 5 --out "$work/out"
+touch "$work/file"
+expect_error "out is a file" "not a folder" convergence --shape sphere1 --h 0.2:0.1:2 --out "$work/file"
+
+# A failed run does not touch existing results.
+mkdir -p "$work/keep" && echo precious >"$work/keep/convergence.csv"
+"$DSREG" convergence --shape plane --h 0.2:0.1:2 --wall-margin 5 --out "$work/keep" -q >/dev/null 2>&1
+check "existing csv kept on failure" grep -q precious "$work/keep/convergence.csv"
+
+echo "$passes passed, $failures failed"
+[[ $failures -eq 0 ]]
