@@ -501,5 +501,29 @@ TEST(Plot, SvgHasOnePathPerCurveAndTheSlopesInTheLegend) {
     EXPECT_NE(svg.find("slope 2.00"), std::string::npos);
 }
 
+TEST(Plot, EachAxisWritesItsTicksInOneFormatAndTheLegendAvoidsTheCurves) {
+    // y from 5e-4 to 2e-2 has the ticks 10⁻³ and 10⁻²: both as powers of ten, not "0.01" next to
+    // "10⁻³". x from 0.05 to 0.2 has the ticks 0.05, 0.1, 0.2: plain decimals.
+    PlotPanel panel;
+    panel.title = "t";
+    panel.y_label = "y";
+    panel.reference_slope_one = false;
+    panel.curves = {PlotCurve{"rising", {0.05, 0.1, 0.2}, {5e-4, 3e-3, 2e-2}}};
+    const std::string svg = log_log_plot_svg("title", "h", {panel}, 1);
+    EXPECT_NE(svg.find(">10<tspan dy=\"-6\" font-size=\"9\">\u22122</tspan>"), std::string::npos);
+    EXPECT_NE(svg.find(">10<tspan dy=\"-6\" font-size=\"9\">\u22123</tspan>"), std::string::npos);
+    EXPECT_EQ(svg.find(">0.01<"), std::string::npos);
+    EXPECT_NE(svg.find(">0.05<"), std::string::npos);
+    EXPECT_NE(svg.find(">0.1<"), std::string::npos);
+    EXPECT_NE(svg.find(">0.2<"), std::string::npos);
+    // The curve rises from bottom-left to top-right: the legend box goes to the top-left corner
+    // (left_ + 5 = 77, top_ + 4 = 72, title height 34 included). A falling curve sends it to the
+    // top-right corner (right_ − 5 − 150 = 229).
+    EXPECT_NE(svg.find("<rect x=\"77.00\" y=\"72.00\" width=\"150.00\""), std::string::npos);
+    panel.curves = {PlotCurve{"falling", {0.05, 0.1, 0.2}, {2e-2, 3e-3, 5e-4}}};
+    const std::string falling = log_log_plot_svg("title", "h", {panel}, 1);
+    EXPECT_NE(falling.find("<rect x=\"229.00\" y=\"72.00\" width=\"150.00\""), std::string::npos);
+}
+
 }  // namespace
 }  // namespace dsreg

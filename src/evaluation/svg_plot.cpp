@@ -73,18 +73,24 @@ std::vector<double> tick_values(const LogRange& r) {
     return ticks;
 }
 
-/// "10<sup>k</sup>" for powers of ten, else a short decimal.
-std::string tick_label(double value) {
+/// True for values written as a plain decimal (0.01 … 9999).
+bool is_moderate(double value) {
+    const double decade = std::floor(std::log10(value) + 1e-9);
+    return decade >= -2 && decade <= 3;
+}
+
+/// A short decimal when `decimal` (the caller passes it for a whole axis, so that one axis never
+/// mixes "0.01" with "10⁻³"); otherwise 10^k (superscript) for powers of ten, else m×10^k.
+std::string tick_label(double value, bool decimal) {
+    if (decimal) {
+        std::ostringstream s;
+        s << value;
+        return s.str();
+    }
     const double k = std::round(std::log10(value));
     if (std::abs(std::pow(10.0, k) - value) < 1e-9 * value) {
         const std::string exponent = k < 0 ? "\u2212" + std::to_string(int(-k)) : std::to_string(int(k));
         return "10<tspan dy=\"-6\" font-size=\"9\">" + exponent + "</tspan>";
-    }
-    // m·10^k with m = 2 or 5: a plain decimal for moderate k, else m×10^k.
-    if (k >= -2 && k <= 3) {
-        std::ostringstream s;
-        s << value;
-        return s.str();
     }
     const double mantissa = std::round(value / std::pow(10.0, std::floor(std::log10(value))));
     const double exponent = std::floor(std::log10(value));
@@ -93,6 +99,9 @@ std::string tick_label(double value) {
       << (exponent < 0 ? "\u2212" + std::to_string(int(-exponent)) : std::to_string(int(exponent))) << "</tspan>";
     return s.str();
 }
+
+/// Whether every tick of an axis can be written as a plain decimal.
+bool decimal_axis(const std::vector<double>& ticks) { return std::all_of(ticks.begin(), ticks.end(), is_moderate); }
 
 class PanelWriter {
 public:
@@ -120,20 +129,23 @@ private:
     double py(double y) const { return to_pixel(y, y_range_, bottom_, top_); }
 
     void write_frame_and_ticks(const PlotPanel& panel, const std::string& x_label) {
-        for (double t : tick_values(x_range_)) {
+        const std::vector<double> x_ticks = tick_values(x_range_), y_ticks = tick_values(y_range_);
+        const bool x_decimal = decimal_axis(x_ticks), y_decimal = decimal_axis(y_ticks);
+        for (double t : x_ticks) {
             const double x = px(t);
             out_ << "<line x1=\"" << number(x) << "\" y1=\"" << number(top_) << "\" x2=\"" << number(x) << "\" y2=\""
                  << number(bottom_) << "\" stroke=\"#e4e4e4\"/>\n";
             out_ << "<text x=\"" << number(x) << "\" y=\"" << number(bottom_ + 16) << "\" text-anchor=\"middle\">"
-                 << tick_label(t) << "</text>\n";
+                 << tick_label(t, x_decimal) << "</text>\n";
         }
-        for (double t : tick_values(y_range_)) {
+        for (double t : y_ticks) {
             const double y = py(t);
             out_ << "<line x1=\"" << number(left_) << "\" y1=\"" << number(y) << "\" x2=\"" << number(right_) << "\" y2=\""
                  << number(y) << "\" stroke=\"#e4e4e4\"/>\n";
             out_ << "<text x=\"" << number(left_ - 6) << "\" y=\"" << number(y + 4) << "\" text-anchor=\"end\">"
-                 << tick_label(t) << "</text>\n";
+                 << tick_label(t, y_decimal) << "</text>\n";
         }
+        write_minor_ticks();
         out_ << "<rect x=\"" << number(left_) << "\" y=\"" << number(top_) << "\" width=\"" << number(right_ - left_)
              << "\" height=\"" << number(bottom_ - top_) << "\" fill=\"none\" stroke=\"#444\"/>\n";
         out_ << "<text x=\"" << number((left_ + right_) / 2) << "\" y=\"" << number(y0_ + 20)
@@ -143,6 +155,25 @@ private:
         const double label_x = x0_ + 16, label_y = (top_ + bottom_) / 2;
         out_ << "<text x=\"" << number(label_x) << "\" y=\"" << number(label_y) << "\" text-anchor=\"middle\" transform=\"rotate(-90 "
              << number(label_x) << " " << number(label_y) << ")\">" << escape(panel.y_label) << "</text>\n";
+    }
+
+    /// Short unlabelled marks at 2…9 × 10^k inside the frame, on both axes.
+    void write_minor_ticks() {
+        auto marks = [](const LogRange& r) {
+            std::vector<double> values;
+            for (int k = int(std::floor(r.low)); k <= int(std::ceil(r.high)); ++k)
+                for (int m = 2; m <= 9; ++m) {
+                    const double v = m * std::pow(10.0, k);
+                    if (std::log10(v) >= r.low && std::log10(v) <= r.high) values.push_back(v);
+                }
+            return values;
+        };
+        for (double t : marks(x_range_))
+            out_ << "<line x1=\"" << number(px(t)) << "\" y1=\"" << number(bottom_) << "\" x2=\"" << number(px(t))
+                 << "\" y2=\"" << number(bottom_ - 4) << "\" stroke=\"#444\"/>\n";
+        for (double t : marks(y_range_))
+            out_ << "<line x1=\"" << number(left_) << "\" y1=\"" << number(py(t)) << "\" x2=\"" << number(left_ + 4)
+                 << "\" y2=\"" << number(py(t)) << "\" stroke=\"#444\"/>\n";
     }
 
     /// A dashed line of slope 1 through half the value of the first curve at its largest x.
@@ -184,12 +215,47 @@ private:
                  << "\"/>\n";
     }
 
+    /// Top-left corner of the legend box: the corner of the plot that hides the least of the
+    /// curves (their markers, and their segments sampled every few pixels); the first corner in
+    /// the order top-left, top-right, bottom-right, bottom-left on a tie.
+    std::pair<double, double> legend_corner(const PlotPanel& panel, double width, double height) const {
+        std::vector<std::pair<double, double>> samples;
+        for (const PlotCurve& c : panel.curves) {
+            std::vector<std::pair<double, double>> points;
+            for (std::size_t i = 0; i < std::min(c.x.size(), c.y.size()); ++i)
+                if (c.x[i] > 0 && c.y[i] > 0 && std::isfinite(c.x[i]) && std::isfinite(c.y[i]))
+                    points.emplace_back(px(c.x[i]), py(c.y[i]));
+            for (std::size_t i = 0; i < points.size(); ++i) {
+                for (int m = 0; m < 4; ++m) samples.push_back(points[i]);  // a marker weighs more than a line
+                if (i + 1 == points.size()) break;
+                const auto [x0, y0] = points[i];
+                const auto [x1, y1] = points[i + 1];
+                const int pieces = std::max(1, int(std::hypot(x1 - x0, y1 - y0) / 5.0));
+                for (int k = 1; k < pieces; ++k)
+                    samples.emplace_back(x0 + (x1 - x0) * k / pieces, y0 + (y1 - y0) * k / pieces);
+            }
+        }
+        const std::pair<double, double> corners[] = {{left_ + 5, top_ + 4}, {right_ - 5 - width, top_ + 4},
+                                                     {right_ - 5 - width, bottom_ - 4 - height}, {left_ + 5, bottom_ - 4 - height}};
+        std::pair<double, double> best = corners[0];
+        std::size_t fewest = std::numeric_limits<std::size_t>::max();
+        for (const auto& [bx, by] : corners) {
+            std::size_t hidden = 0;
+            for (const auto& [x, y] : samples)
+                hidden += (x >= bx - 4 && x <= bx + width + 4 && y >= by - 4 && y <= by + height + 4) ? 1 : 0;
+            if (hidden < fewest) fewest = hidden, best = {bx, by};
+        }
+        return best;
+    }
+
     void write_legend(const PlotPanel& panel) {
-        double y = top_ + 16;
-        const double x = left_ + 10;
         const double rows = double(panel.curves.size()) + (panel.reference_slope_one ? 1.0 : 0.0);
-        out_ << "<rect x=\"" << number(x - 5) << "\" y=\"" << number(top_ + 4) << "\" width=\"150\" height=\""
-             << number(16 * rows + 4) << "\" fill=\"white\" fill-opacity=\"0.85\" stroke=\"#ccc\"/>\n";
+        const double width = 150, height = 16 * rows + 4;
+        const auto [box_x, box_y] = legend_corner(panel, width, height);
+        out_ << "<rect x=\"" << number(box_x) << "\" y=\"" << number(box_y) << "\" width=\"" << number(width)
+             << "\" height=\"" << number(height) << "\" fill=\"white\" fill-opacity=\"0.85\" stroke=\"#ccc\"/>\n";
+        const double x = box_x + 5;
+        double y = box_y + 16;
         for (std::size_t c = 0; c < panel.curves.size(); ++c, y += 16) {
             const char* colour = curve_colours[c % (sizeof curve_colours / sizeof *curve_colours)];
             out_ << "<line x1=\"" << number(x) << "\" y1=\"" << number(y - 4) << "\" x2=\"" << number(x + 18) << "\" y2=\""
