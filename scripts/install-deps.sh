@@ -2,10 +2,19 @@
 # Installs the Debian 12 packages dsreg needs, if any is missing.
 #   scripts/install-deps.sh          build and run dsreg
 #   scripts/install-deps.sh --dev    also the test and benchmark libraries
+#   scripts/install-deps.sh --fuzz   also clang with its sanitizer/libFuzzer runtimes and OpenMP
+#                                    (scripts/sanitize.sh, scripts/fuzz.sh); implies --dev
 set -euo pipefail
 packages=(build-essential cmake pkg-config libeigen3-dev libsuitesparse-dev libopenblas-dev zlib1g-dev
           libcli11-dev nlohmann-json3-dev)
-if [[ ${1:-} == --dev ]]; then packages+=(libgtest-dev libgmock-dev libbenchmark-dev); fi
+dev=(libgtest-dev libgmock-dev libbenchmark-dev)
+for option in "$@"; do
+    case $option in
+        --dev) packages+=("${dev[@]}") ;;
+        --fuzz) packages+=("${dev[@]}" clang libclang-rt-14-dev libomp-dev) ;;
+        *) echo "usage: $0 [--dev] [--fuzz]" >&2; exit 2 ;;
+    esac
+done
 
 missing=()
 for p in "${packages[@]}"; do
