@@ -123,9 +123,19 @@ std::string csv_text(const std::vector<ConvergenceStep>& steps) {
     return out.str();
 }
 
+/// The shape as the plot title names it: a plane's polynomial is too long for a title.
+std::string short_shape_name(const ConvergenceCommandOptions& o, const ImplicitShape& shape) {
+    if (o.truth.shape != "plane" || o.truth.plane_normal.size() != 3) return shape.name;
+    std::ostringstream s;
+    s << "plane n·x = " << format("%g", o.truth.plane_offset) << ", n ∝ (" << format("%.4g", o.truth.plane_normal[0])
+      << ", " << format("%.4g", o.truth.plane_normal[1]) << ", " << format("%.4g", o.truth.plane_normal[2]) << ") in [-"
+      << format("%g", o.truth.box ? *o.truth.box : 1.0) << ", " << format("%g", o.truth.box ? *o.truth.box : 1.0) << "]³";
+    return s.str();
+}
+
 std::string describe_run(const ConvergenceCommandOptions& o, const ImplicitShape& shape, const std::vector<double>& steps) {
     std::ostringstream s;
-    s << shape.name << ", " << (o.normals == "ii" ? "II normals r = " + format("%g", o.radius_k) + "·h^(1/3)" : "exact normals")
+    s << short_shape_name(o, shape) << ", " << (o.normals == "ii" ? "II normals r = " + format("%g", o.radius_k) + "·h^(1/3)" : "exact normals")
       << ", alpha = " << format("%g", o.alpha_k) << "·h², beta = " << format("%g", o.beta) << ", gamma = "
       << format("%g", o.gamma) << "; " << steps.size() << " steps h = " << format("%g", steps.front()) << " → "
       << format("%g", steps.back());

@@ -115,6 +115,14 @@ ConvergenceStep run_convergence_step(const ImplicitShape& shape, double h, const
     if (options.normals == InputNormalField::IntegralInvariant) {
         step.radius = options.radius_k * std::cbrt(h);
         u = integral_invariant_normals(volume, surface, step.radius);
+        // The faces on a clipped box wall are not part of the shape: they get the wall's normal,
+        // as in solid_exact_normals(). With II normals there, rounded over r at every box edge,
+        // no closed surface is aligned with u, and with α ~ h² the whole box deforms (the plane
+        // part drifted by more than h along its normal in [-1,1]³).
+        detail::parallel_for_checked(surface.face_count(), [&](std::int64_t f) {
+            const Surfel& s = surface.surfels[std::size_t(f)];
+            if (is_box_wall_face(shape, surface.grid, s)) u.row(f) = s.trivial_normal().transpose();
+        });
     } else {
         u = solid_exact_normals(shape, surface);
     }

@@ -319,8 +319,12 @@ std::string log_log_plot_svg(const std::string& title, const std::string& x_labe
         << "\" viewBox=\"0 0 " << number(width) << " " << number(height)
         << "\" font-family=\"Helvetica, Arial, sans-serif\" font-size=\"11\">\n";
     out << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
-    out << "<text x=\"" << number(width / 2) << "\" y=\"22\" text-anchor=\"middle\" font-size=\"15\" font-weight=\"bold\">"
-        << escape(title) << "</text>\n";
+    // Bold Helvetica averages about 0.6 em per character: shrink a title that would not fit.
+    std::size_t characters = 0;
+    for (unsigned char c : title) characters += (c & 0xC0) != 0x80 ? 1 : 0;  // UTF-8 code points
+    const double font_size = std::max(8.0, std::min(15.0, (width - 20) / (0.6 * double(std::max<std::size_t>(1, characters)))));
+    out << "<text x=\"" << number(width / 2) << "\" y=\"22\" text-anchor=\"middle\" font-size=\"" << number(font_size)
+        << "\" font-weight=\"bold\">" << escape(title) << "</text>\n";
     for (std::size_t i = 0; i < panels.size(); ++i) {
         const double x0 = double(int(i) % columns) * panel_width;
         const double y0 = title_height + double(int(i) / columns) * panel_height;
