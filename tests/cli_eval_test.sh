@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # End-to-end checks of `dsreg eval` and `dsreg convergence`: outputs, JSON keys, CSV columns,
-# exit codes, error messages, and that a failed run leaves no output behind.
+# exit codes, error messages, known answers on hand-written meshes (a cube and an octahedron
+# against the unit sphere), and that a failed run leaves no output behind.
 set -u
 : "${DSREG:?set DSREG to the dsreg executable}"
 work=$(mktemp -d)
@@ -67,6 +68,54 @@ check "eval reads PLY (quads)" grep -q '"normal_angle_deg"' <<<"$ply_json"
     --gamma 0 --alpha 1e-7 -o "$work/plane.obj" -q
 plane=$("$DSREG" eval "$work/plane.obj" --shape plane --h 0.1)
 check "plane: walls left out" grep -q "clipped box face left out" <<<"$plane"
+
+# Meshes with known answers, written by hand.
+json_field() {  # json_field JSON OBJECT FIELD: the number FIELD of the top-level object OBJECT
+    awk -v obj="\"$2\": {" -v field="\"$3\":" '
+        index($0, obj) { inside = 1; next }
+        inside && /}/ { inside = 0 }
+        inside && index($0, field) { sub(/.*: */, ""); sub(/,$/, ""); print; exit }' <<<"$1"
+}
+json_top() {  # json_top JSON KEY: a top-level number
+    awk -v key="  \"$2\":" 'index($0, key) == 1 { sub(/.*: */, ""); sub(/,$/, ""); print; exit }' <<<"$1"
+}
+near() {  # near X Y TOLERANCE
+    awk -v x="$1" -v y="$2" -v t="$3" 'BEGIN { d = x - y; if (d < 0) d = -d; exit !(x != "" && d <= t) }'
+}
+# The cube [-1,1]^3 (6 quads) against the unit sphere: every vertex is sqrt(3) - 1 away, every face
+# centroid is on an axis (angle 0), the volume is 8 against 4/3 pi, and at h = 0.3 the voxel centres
+# (0.3 i, 0.3 j, 0.3 k), |i|,|j|,|k| <= 5, inside the cube but outside the sphere are 172 of 11^3.
+printf 'v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n' >"$work/cube.obj"
+printf 'f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n' >>"$work/cube.obj"
+cube=$("$DSREG" eval "$work/cube.obj" --shape sphere1 --h 0.3 --json)
+check "cube: 8 vertices, 6 faces" test "$(json_field "$cube" vertices evaluated)$(json_field "$cube" faces evaluated)" = 86
+check "cube: vertex distance Linf sqrt(3)-1" near "$(json_field "$cube" vertex_distance linf)" 0.7320508075688772 1e-12
+check "cube: vertex distance mean sqrt(3)-1" near "$(json_field "$cube" vertex_distance mean)" 0.7320508075688772 1e-12
+check "cube: in units of h" near "$(json_field "$cube" vertex_distance_h linf)" 2.440169358562924 1e-9
+check "cube: normal angle 0" near "$(json_field "$cube" normal_angle_deg linf)" 0 1e-9
+check "cube: volume 8" near "$(json_top "$cube" mesh_volume)" 8 1e-12
+check "cube: relative volume error 6/pi - 1" near "$(json_top "$cube" relative_volume_error)" 0.909859317102744 1e-6
+check "cube: 11^3 voxels" test "$(json_field "$cube" voxel_classification total)" = 1331
+check "cube: 172 voxels wrong" test "$(json_field "$cube" voxel_classification correct)" = 1159
+check "cube: 12 right triangles" test "$(json_field "$cube" triangle_min_angle_deg triangles)" = 12
+check "cube: 45 degrees" near "$(json_field "$cube" triangle_min_angle_deg min)" 45 1e-9
+# The regular octahedron |x|+|y|+|z| = 1, an exact (inscribed) sphere triangulation: vertices on the
+# sphere, face normals (+-1,+-1,+-1)/sqrt(3) radial at the centroids, volume 4/3, equilateral.
+printf 'v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n' >"$work/octahedron.obj"
+printf 'f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n' >>"$work/octahedron.obj"
+octahedron=$("$DSREG" eval "$work/octahedron.obj" --shape sphere1 --h 0.3 --json)
+check "octahedron: vertices on the sphere" near "$(json_field "$octahedron" vertex_distance linf)" 0 1e-12
+check "octahedron: normals radial" near "$(json_field "$octahedron" normal_angle_deg linf)" 0 1e-6
+check "octahedron: relative volume error 1/pi - 1" near "$(json_top "$octahedron" relative_volume_error)" -0.681690113816209 1e-6
+check "octahedron: equilateral" near "$(json_field "$octahedron" triangle_min_angle_deg min)" 60 1e-9
+# The same octahedron shifted by 0.25 along x: (1.25,0,0) and (-0.75,0,0) are 0.25 away, the
+# four others sqrt(1.0625) - 1.
+printf 'v 1.25 0 0\nv -0.75 0 0\nv 0.25 1 0\nv 0.25 -1 0\nv 0.25 0 1\nv 0.25 0 -1\n' >"$work/shifted.obj"
+grep '^f' "$work/octahedron.obj" >>"$work/shifted.obj"
+shifted=$("$DSREG" eval "$work/shifted.obj" --shape sphere1 --json)
+check "shifted octahedron: Linf 0.25" near "$(json_field "$shifted" vertex_distance linf)" 0.25 1e-12
+check "shifted octahedron: mean" near "$(json_field "$shifted" vertex_distance mean)" \
+    "$(awk 'BEGIN { printf "%.15f", (2 * 0.25 + 4 * (sqrt(1.0625) - 1)) / 6 }')" 1e-12
 
 # --- convergence -----------------------------------------------------------------------------
 summary=$("$DSREG" convergence --shape sphere1 --h 0.2:0.1:3 --out "$work/conv/nested" 2>"$work/progress.txt")
