@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <cmath>
 #include <random>
 
 #include "dsreg/error.hpp"
@@ -37,6 +38,100 @@ PointMatrix jitter(const PointMatrix& p, double amount, unsigned seed) {
 double matrix_energy(const RegularizationSystem& s, const PointMatrix& candidate) {
     const Eigen::VectorXd x = flatten_points(candidate);
     return x.dot(s.matrix * x) - 2 * s.rhs.dot(x) + s.constant;
+}
+
+/// R assembled term by term from eq. (1) with triplets, independently of the block assembly:
+/// α α_i w0_i I3 on (i,i); γ γ_i w0_i F_iᵀF_i ⊗ I3 for each row F_i of I − B; β β_f w2_f u uᵀ with
+/// signs on (a,a), (b,b), (a,b), (b,a) for every edge (a,b) of every face f.
+Eigen::SparseMatrix<double> reference_matrix(const DigitalSurface& s, const VertexLinks& links, const PointMatrix& u,
+                                             const RegularizationWeights& w) {
+    const auto one_or = [](const Eigen::VectorXd& v, Eigen::Index i) { return v.size() ? v[i] : 1.0; };
+    std::vector<Eigen::Triplet<double>> t;
+    const auto add_scalar = [&](Eigen::Index a, Eigen::Index b, double v) {
+        for (int d = 0; d < 3; ++d) t.emplace_back(3 * a + d, 3 * b + d, v);
+    };
+    const auto add_block = [&](Eigen::Index a, Eigen::Index b, const Eigen::Matrix3d& m) {
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) t.emplace_back(3 * a + r, 3 * b + c, m(r, c));
+    };
+    for (Eigen::Index i = 0; i < s.vertex_count(); ++i) {
+        add_scalar(i, i, w.alpha * one_or(w.vertex_alpha, i) * one_or(w.vertex_weights, i));
+        if (links.size(i) == 0) continue;
+        std::vector<std::pair<Eigen::Index, double>> row{{i, 1.0}};
+        for (std::int64_t q = links.offsets[std::size_t(i)]; q < links.offsets[std::size_t(i + 1)]; ++q)
+            row.emplace_back(links.neighbors[std::size_t(q)], -1.0 / double(links.size(i)));
+        const double g = w.gamma * one_or(w.vertex_gamma, i) * one_or(w.vertex_weights, i);
+        for (const auto& [a, fa] : row)
+            for (const auto& [b, fb] : row) add_scalar(a, b, g * fa * fb);
+    }
+    for (Eigen::Index f = 0; f < s.face_count(); ++f) {
+        const Eigen::Vector3d n = u.row(f).transpose();
+        const Eigen::Matrix3d m = w.beta * one_or(w.face_beta, f) * one_or(w.face_weights, f) * n * n.transpose();
+        for (Eigen::Index e = 0; e < s.quads.cols(); ++e) {
+            const Eigen::Index a = s.quads(f, e), b = s.quads(f, (e + 1) % s.quads.cols());
+            add_block(a, a, m);
+            add_block(b, b, m);
+            add_block(a, b, -m);
+            add_block(b, a, -m);
+        }
+    }
+    Eigen::SparseMatrix<double> r(3 * s.vertex_count(), 3 * s.vertex_count());
+    r.setFromTriplets(t.begin(), t.end());
+    return r;
+}
+
+TEST(Regularization, BlockAssemblyEqualsTermByTermAssemblyAndIsExactlySymmetric) {
+    const Fixture x = small_ball_with_ii_normals();
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> positive(0.2, 3.0);
+    std::bernoulli_distribution zero(0.2);
+    const auto random_vector = [&](Eigen::Index size, bool zeros) {
+        return Eigen::VectorXd::NullaryExpr(size, [&] { return zeros && zero(rng) ? 0.0 : positive(rng); }).eval();
+    };
+    RegularizationWeights local{0.3, 1.7, 0.6, {}, {}};
+    local.vertex_weights = random_vector(x.surface.vertex_count(), false);
+    local.face_weights = random_vector(x.surface.face_count(), false);
+    local.vertex_alpha = random_vector(x.surface.vertex_count(), false);
+    local.face_beta = random_vector(x.surface.face_count(), true);     // some faces without alignment
+    local.vertex_gamma = random_vector(x.surface.vertex_count(), true);  // some vertices without fairness
+    for (const RegularizationWeights& w :
+         {RegularizationWeights{}, RegularizationWeights{1e-5, 1, 0, {}, {}}, RegularizationWeights{1e-3, 0, 1e-2, {}, {}}, local}) {
+        const RegularizationSystem s = assemble_regularization_system(x.surface.vertices, x.surface.quads, x.links, x.normals, w);
+        const Eigen::SparseMatrix<double> reference = reference_matrix(x.surface, x.links, x.normals, w);
+        EXPECT_LE((s.matrix - reference).norm(), 1e-14 * reference.norm());
+        const Eigen::SparseMatrix<double> transposed = s.matrix.transpose();
+        EXPECT_EQ((s.matrix - transposed).norm(), 0.0) << "R must be exactly symmetric (the solvers read its CSC as CSR)";
+        EXPECT_TRUE(s.matrix.isCompressed());
+        // No entry is stored twice and columns are sorted in each column of the CSC arrays.
+        for (Eigen::Index c = 0; c < s.matrix.outerSize(); ++c)
+            for (int q = s.matrix.outerIndexPtr()[c] + 1; q < s.matrix.outerIndexPtr()[c + 1]; ++q)
+                ASSERT_LT(s.matrix.innerIndexPtr()[q - 1], s.matrix.innerIndexPtr()[q]);
+    }
+}
+
+TEST(Regularization, MatrixEnergyEqualsTermByTermEnergyOnAVolumeFromTheShapes) {
+    // A larger surface (assembled in parallel) with split pointels and every local weight.
+    const auto volume = test::make_volume({30, 28, 26}, [](double x, double y, double z) {
+        return std::sin(0.7 * x) + std::cos(0.5 * y) + 0.3 * std::sin(0.9 * z) > 0.2;
+    });
+    Fixture x;
+    x.surface = extract_digital_surface(volume, Connectivity::TwentySix);
+    x.links = vertex_links(x.surface.quads, x.surface.vertex_count());
+    x.normals = integral_invariant_normals(volume, x.surface, 2.5);
+    ASSERT_GT(x.surface.vertex_count(), 4096) << "large enough for the parallel assembly";
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> positive(0.2, 3.0);
+    RegularizationWeights w{2e-3, 1.3, 0.2, {}, {}};
+    w.vertex_weights = Eigen::VectorXd::NullaryExpr(x.surface.vertex_count(), [&] { return positive(rng); });
+    w.face_beta = Eigen::VectorXd::NullaryExpr(x.surface.face_count(), [&] { return positive(rng); });
+    w.vertex_gamma = Eigen::VectorXd::NullaryExpr(x.surface.vertex_count(), [&] { return positive(rng); });
+    const RegularizationSystem s = assemble_regularization_system(x.surface.vertices, x.surface.quads, x.links, x.normals, w);
+    EXPECT_LE((s.matrix - reference_matrix(x.surface, x.links, x.normals, w)).norm(), 1e-14 * s.matrix.norm());
+    for (unsigned seed = 0; seed < 3; ++seed) {
+        const PointMatrix q = jitter(x.surface.vertices, 0.8, seed);
+        const double by_terms = regularization_energy(q, x.surface.vertices, x.surface.quads, x.links, x.normals, w).total(w);
+        EXPECT_NEAR(matrix_energy(s, q), by_terms, 1e-9 * by_terms);
+    }
 }
 
 TEST(Regularization, MatrixIsSymmetricPositiveDefinite) {

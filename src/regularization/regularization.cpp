@@ -12,8 +12,6 @@ namespace dsreg {
 
 namespace {
 
-using ScalarRowMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
-
 /// An optional per-element factor: 1 where the vector is empty.
 double element_or_one(const Eigen::VectorXd& values, std::int64_t index) {
     return values.size() ? values[index] : 1.0;
@@ -46,111 +44,214 @@ void check_per_element(const Eigen::VectorXd& values, std::int64_t expected, con
     }
 }
 
-/// I − B of eq. (13–14): row i has 1 on the diagonal and −1/|link(i)| on each link entry.
-ScalarRowMatrix fairness_operator(const VertexLinks& links) {
-    const std::int64_t n = static_cast<std::int64_t>(links.offsets.size()) - 1;
-    std::vector<Eigen::Triplet<double>> entries;
-    entries.reserve(links.neighbors.size() + std::size_t(n));
-    for (std::int64_t i = 0; i < n; ++i) {
-        if (links.size(i) == 0) continue;  // an isolated vertex is its own barycentre
-        entries.emplace_back(i, i, 1.0);
-        const double share = 1.0 / double(links.size(i));
+/// Vertex → (face, corner) incidences, in increasing face order for each vertex.
+struct Incidence {
+    std::vector<std::int64_t> start;
+    std::vector<std::int64_t> face;  ///< f·k + corner
+};
+
+Incidence vertex_incidence(const FaceMatrix& quads, std::int64_t n) {
+    const std::int64_t m = quads.rows(), k = quads.cols();
+    Incidence inc;
+    inc.start.assign(std::size_t(n + 1), 0);
+    for (std::int64_t f = 0; f < m; ++f)
+        for (std::int64_t e = 0; e < k; ++e) ++inc.start[std::size_t(quads(f, e)) + 1];
+    for (std::int64_t i = 0; i < n; ++i) inc.start[std::size_t(i + 1)] += inc.start[std::size_t(i)];
+    inc.face.resize(std::size_t(inc.start.back()));
+    std::vector<std::int64_t> next(inc.start.begin(), inc.start.end() - 1);
+    for (std::int64_t f = 0; f < m; ++f)
+        for (std::int64_t e = 0; e < k; ++e) inc.face[std::size_t(next[std::size_t(quads(f, e))]++)] = f * k + e;
+    return inc;
+}
+
+/// The transpose of the link relation: in(j) = {i : j ∈ link(i)} with multiplicity, increasing i.
+VertexLinks incoming_links(const VertexLinks& links, std::int64_t n) {
+    VertexLinks in;
+    in.offsets.assign(std::size_t(n + 1), 0);
+    for (std::int32_t j : links.neighbors) ++in.offsets[std::size_t(j) + 1];
+    for (std::int64_t i = 0; i < n; ++i) in.offsets[std::size_t(i + 1)] += in.offsets[std::size_t(i)];
+    in.neighbors.resize(links.neighbors.size());
+    std::vector<std::int64_t> next(in.offsets.begin(), in.offsets.end() - 1);
+    for (std::int64_t i = 0; i < n; ++i)
         for (std::int64_t q = links.offsets[std::size_t(i)]; q < links.offsets[std::size_t(i + 1)]; ++q)
-            entries.emplace_back(i, links.neighbors[std::size_t(q)], -share);
-    }
-    ScalarRowMatrix op(n, n);
-    op.setFromTriplets(entries.begin(), entries.end());
-    return op;
+            in.neighbors[std::size_t(next[std::size_t(links.neighbors[std::size_t(q)])]++)] = std::int32_t(i);
+    return in;
 }
 
-/// The part of R that acts on each coordinate separately (α W0_α + γ (I−B)ᵀ W0_γ (I−B), with
-/// W0_α = diag(α_i w0_i), W0_γ = diag(γ_i w0_i)), with explicit zeros added on every mesh edge
-/// so that the alignment blocks have a place.
-ScalarRowMatrix coordinate_wise_part(const VertexLinks& links, const RegularizationWeights& w, std::int64_t n) {
-    ScalarRowMatrix part(n, n);
-    if (w.gamma > 0) {
-        Eigen::VectorXd w0_gamma(n);
-        for (std::int64_t i = 0; i < n; ++i) w0_gamma[i] = fairness_weight(w, i);
-        const ScalarRowMatrix fair = fairness_operator(links);
-        part = w.gamma * (ScalarRowMatrix(fair.transpose()) * w0_gamma.asDiagonal() * fair);
+/// Direct assembly of R (eq. 22–23) in its 3×3 block structure, one block row per vertex j:
+///   R_jk = (α α_j w0_j [j = k] + γ Σ_i γ_i w0_i F_ij F_ik) I3 + β Σ_f β_f w2_f (±u_f u_fᵀ per edge),
+/// with F = I − B (eq. 13–14; F_ii = 1, F_ik = −1/|link(i)| for k ∈ link(i), row i empty if the
+/// link is). Row j gathers its terms from i ∈ {j} ∪ in(j) (the rows of F with an entry in column j)
+/// and from the faces around j, so rows are independent and built in parallel, in time linear in
+/// the non-zeros. Block (j,k) and block (k,j) receive the same terms in the same order (increasing
+/// i, increasing f, products written symmetrically), so R is exactly symmetric. A block with an
+/// alignment part is stored full (9 entries), the others (the fairness 2-ring) as their diagonal.
+class BlockAssembler {
+public:
+    BlockAssembler(const FaceMatrix& quads, const VertexLinks& links, const PointMatrix& normals,
+                   const RegularizationWeights& w, std::int64_t n)
+        : quads_(quads), links_(links), normals_(normals), w_(w), n_(n), k_(quads.cols()),
+          in_(incoming_links(links, n)), incidence_(vertex_incidence(quads, n)) {
+        face_weight_.resize(std::size_t(quads.rows()));
+        for (Eigen::Index f = 0; f < quads.rows(); ++f) face_weight_[std::size_t(f)] = w.beta * alignment_weight(w, f);
+        fair_weight_.assign(std::size_t(n), 0.0);
+        fairness_ = false;
+        if (w.gamma > 0)
+            for (std::int64_t i = 0; i < n; ++i) {
+                fair_weight_[std::size_t(i)] = links.size(i) > 0 ? w.gamma * fairness_weight(w, i) : 0.0;
+                fairness_ = fairness_ || fair_weight_[std::size_t(i)] != 0;
+            }
     }
-    std::vector<Eigen::Triplet<double>> structure;
-    structure.reserve(links.neighbors.size() + std::size_t(n));
-    for (std::int64_t i = 0; i < n; ++i) {
-        structure.emplace_back(i, i, w.alpha * data_weight(w, i));
-        for (std::int64_t q = links.offsets[std::size_t(i)]; q < links.offsets[std::size_t(i + 1)]; ++q)
-            structure.emplace_back(i, links.neighbors[std::size_t(q)], 0.0);
-    }
-    ScalarRowMatrix data_and_edges(n, n);
-    data_and_edges.setFromTriplets(structure.begin(), structure.end());
-    ScalarRowMatrix sum = part + data_and_edges;
-    sum.makeCompressed();
-    return sum;
-}
 
-std::int64_t slot_of(const ScalarRowMatrix& m, std::int64_t row, std::int64_t col) {
-    const int* first = m.innerIndexPtr() + m.outerIndexPtr()[row];
-    const int* last = m.innerIndexPtr() + m.outerIndexPtr()[row + 1];
-    const int* it = std::lower_bound(first, last, static_cast<int>(col));
-    return it - m.innerIndexPtr();
-}
+    struct Scratch {
+        std::vector<std::int32_t> slot;
+        std::vector<std::int32_t> columns;
+        std::vector<char> full;
+        std::vector<double> scalar;
+        std::vector<Eigen::Matrix3d> block;
+        explicit Scratch(std::int64_t n) : slot(std::size_t(n), -1) {}
+    };
 
-/// 3×3 alignment blocks β β_f w2_f u_f u_fᵀ (eq. 20) accumulated on the pattern of `pattern`:
-/// for each edge (a,b) of face f, +M on blocks (a,a), (b,b) and −M on (a,b), (b,a).
-std::vector<Eigen::Matrix3d> alignment_blocks(const ScalarRowMatrix& pattern, const FaceMatrix& quads,
-                                              const PointMatrix& normals, const RegularizationWeights& w) {
-    std::vector<Eigen::Matrix3d> blocks(std::size_t(pattern.nonZeros()), Eigen::Matrix3d::Zero());
-    if (w.beta == 0) return blocks;
-    const Eigen::Index k = quads.cols();
-    for (Eigen::Index f = 0; f < quads.rows(); ++f) {
-        const Eigen::Vector3d u = normals.row(f).transpose();
-        const double weight = w.beta * alignment_weight(w, f);
-        if (weight == 0) continue;
-        const Eigen::Matrix3d m = weight * (u * u.transpose());
-        for (Eigen::Index e = 0; e < k; ++e) {
-            const std::int64_t a = quads(f, e), b = quads(f, (e + 1) % k);
-            blocks[std::size_t(slot_of(pattern, a, a))] += m;
-            blocks[std::size_t(slot_of(pattern, b, b))] += m;
-            blocks[std::size_t(slot_of(pattern, a, b))] -= m;
-            blocks[std::size_t(slot_of(pattern, b, a))] -= m;
+    /// Pattern of block row j: sorted columns and which blocks are full; values too if asked.
+    void row(std::int64_t j, Scratch& s, bool values) const {
+        s.columns.clear();
+        const auto touch = [&](std::int32_t c) {
+            if (s.slot[std::size_t(c)] < 0) {
+                s.slot[std::size_t(c)] = 0;
+                s.columns.push_back(c);
+            }
+        };
+        touch(std::int32_t(j));
+        for (std::int64_t q = links_.offsets[std::size_t(j)]; q < links_.offsets[std::size_t(j + 1)]; ++q) touch(links_.neighbors[std::size_t(q)]);
+        for (std::int64_t q = in_.offsets[std::size_t(j)]; q < in_.offsets[std::size_t(j + 1)]; ++q) touch(in_.neighbors[std::size_t(q)]);
+        if (fairness_)
+            for_each_fairness_row(j, [&](std::int64_t i, double) {
+                for (std::int64_t q = links_.offsets[std::size_t(i)]; q < links_.offsets[std::size_t(i + 1)]; ++q) touch(links_.neighbors[std::size_t(q)]);
+            });
+        std::sort(s.columns.begin(), s.columns.end());
+        for (std::size_t q = 0; q < s.columns.size(); ++q) s.slot[std::size_t(s.columns[q])] = std::int32_t(q);
+        const auto slot = [&](std::int64_t c) { return std::size_t(s.slot[std::size_t(c)]); };
+
+        s.full.assign(s.columns.size(), 0);
+        if (values) {
+            s.scalar.assign(s.columns.size(), 0.0);
+            s.block.assign(s.columns.size(), Eigen::Matrix3d::Zero());
         }
+        for (std::int64_t q = incidence_.start[std::size_t(j)]; q < incidence_.start[std::size_t(j + 1)]; ++q) {
+            const std::int64_t f = incidence_.face[std::size_t(q)] / k_, e = incidence_.face[std::size_t(q)] % k_;
+            const double weight = face_weight_[std::size_t(f)];
+            if (weight == 0) continue;
+            const std::size_t next = slot(quads_(f, (e + 1) % k_)), previous = slot(quads_(f, (e + k_ - 1) % k_)), self = slot(j);
+            s.full[self] = s.full[next] = s.full[previous] = 1;
+            if (!values) continue;
+            Eigen::Matrix3d m;  // weight·u uᵀ, written so that m is exactly symmetric
+            for (int r = 0; r < 3; ++r)
+                for (int c = 0; c < 3; ++c) m(r, c) = weight * (normals_(f, r) * normals_(f, c));
+            s.block[self] += m;  // edge (previous, j)
+            s.block[self] += m;  // edge (j, next)
+            s.block[next] -= m;
+            s.block[previous] -= m;
+        }
+        if (values) {
+            if (fairness_)
+                for_each_fairness_row(j, [&](std::int64_t i, double f_ij) {
+                    const double wi = fair_weight_[std::size_t(i)];
+                    const double share = -1.0 / double(links_.size(i));
+                    s.scalar[slot(i)] += wi * (f_ij * 1.0);
+                    for (std::int64_t q = links_.offsets[std::size_t(i)]; q < links_.offsets[std::size_t(i + 1)]; ++q)
+                        s.scalar[slot(links_.neighbors[std::size_t(q)])] += wi * (f_ij * share);
+                });
+            s.scalar[slot(j)] += w_.alpha * data_weight(w_, j);
+        }
+        for (std::int32_t c : s.columns) s.slot[std::size_t(c)] = -1;
     }
-    return blocks;
-}
 
-/// Expands scalar part ⊗ I3 + alignment blocks into the 3n×3n interleaved matrix. A block whose
-/// alignment part is zero contributes only its diagonal (the scalar part is ⊗ I3).
-Eigen::SparseMatrix<double> expand_blocks(const ScalarRowMatrix& scalar, const std::vector<Eigen::Matrix3d>& blocks) {
-    const std::int64_t n = scalar.rows();
-    std::vector<char> full(blocks.size());
-    for (std::size_t q = 0; q < blocks.size(); ++q) full[q] = !blocks[q].isZero(0.0);
-    // Entries per scalar row 3a+r: 3 per full block, 1 per diagonal-only block (same for r = 0,1,2).
-    std::vector<std::int64_t> row_start(std::size_t(3 * n + 1), 0);
-    for (std::int64_t a = 0; a < n; ++a) {
+    /// Scalar entries of each of the three scalar rows of block row j.
+    static std::int64_t scalar_count(const Scratch& s) {
         std::int64_t count = 0;
-        for (std::int64_t q = scalar.outerIndexPtr()[a]; q < scalar.outerIndexPtr()[a + 1]; ++q) count += full[std::size_t(q)] ? 3 : 1;
-        for (int r = 0; r < 3; ++r) row_start[std::size_t(3 * a + r + 1)] = count;
+        for (char f : s.full) count += f ? 3 : 1;
+        return count;
+    }
+
+private:
+    /// Calls visit(i, F_ij) for every row i of F with an entry in column j, in increasing i (an
+    /// i with j several times in its link is visited once per occurrence).
+    template <class Visit>
+    void for_each_fairness_row(std::int64_t j, Visit visit) const {
+        const std::int32_t* in = in_.neighbors.data();
+        std::int64_t q = in_.offsets[std::size_t(j)];
+        const std::int64_t last = in_.offsets[std::size_t(j + 1)];
+        bool self_done = false;
+        const auto self = [&] {
+            self_done = true;
+            if (fair_weight_[std::size_t(j)] != 0) visit(j, 1.0);
+        };
+        for (; q < last; ++q) {
+            const std::int64_t i = in[q];
+            if (!self_done && j <= i) self();
+            if (fair_weight_[std::size_t(i)] != 0) visit(i, -1.0 / double(links_.size(i)));
+        }
+        if (!self_done) self();
+    }
+
+    const FaceMatrix& quads_;
+    const VertexLinks& links_;
+    const PointMatrix& normals_;
+    const RegularizationWeights& w_;
+    std::int64_t n_, k_;
+    VertexLinks in_;
+    Incidence incidence_;
+    std::vector<double> face_weight_, fair_weight_;
+    bool fairness_ = false;
+};
+
+Eigen::SparseMatrix<double> assemble_matrix(const FaceMatrix& quads, const VertexLinks& links, const PointMatrix& normals,
+                                            const RegularizationWeights& w, std::int64_t n) {
+    const BlockAssembler assembler(quads, links, normals, w, n);
+    const bool parallel = n >= 4096;
+    // Pass 1: entries per scalar row (the three rows of a vertex have the same count).
+    std::vector<std::int64_t> row_start(std::size_t(3 * n + 1), 0);
+#pragma omp parallel if (parallel)
+    {
+        BlockAssembler::Scratch s(n);
+#pragma omp for schedule(static)
+        for (std::int64_t j = 0; j < n; ++j) {
+            assembler.row(j, s, false);
+            const std::int64_t count = BlockAssembler::scalar_count(s);
+            for (int r = 0; r < 3; ++r) row_start[std::size_t(3 * j + r + 1)] = count;
+        }
     }
     for (std::size_t i = 1; i < row_start.size(); ++i) row_start[i] += row_start[i - 1];
     if (row_start.back() > std::int64_t(INT32_MAX))
         throw Error("regularization system too large: " + std::to_string(row_start.back()) + " non-zeros (limit 2^31)");
 
-    Eigen::SparseMatrix<double> R(3 * n, 3 * n);  // symmetric: row-major layout = column-major layout
+    // Pass 2: values, written in place (symmetric: the row-major layout is the column-major one).
+    Eigen::SparseMatrix<double> R(3 * n, 3 * n);
     R.resizeNonZeros(Eigen::Index(row_start.back()));
-    for (std::int64_t i = 0; i <= 3 * n; ++i) R.outerIndexPtr()[i] = int(row_start[std::size_t(i)]);
-#pragma omp parallel for schedule(static)
-    for (std::int64_t a = 0; a < n; ++a) {
-        for (int r = 0; r < 3; ++r) {
-            std::int64_t out = row_start[std::size_t(3 * a + r)];
-            for (std::int64_t q = scalar.outerIndexPtr()[a]; q < scalar.outerIndexPtr()[a + 1]; ++q) {
-                const std::int64_t b = scalar.innerIndexPtr()[q];
-                const double s = scalar.valuePtr()[q];
-                const Eigen::Matrix3d& block = blocks[std::size_t(q)];
-                for (int c = 0; c < 3; ++c) {
-                    if (!full[std::size_t(q)] && c != r) continue;
-                    R.innerIndexPtr()[out] = int(3 * b + c);
-                    R.valuePtr()[out] = block(r, c) + (c == r ? s : 0.0);
-                    ++out;
+    int* outer = R.outerIndexPtr();
+    int* inner = R.innerIndexPtr();
+    double* value = R.valuePtr();
+    for (std::int64_t i = 0; i <= 3 * n; ++i) outer[i] = int(row_start[std::size_t(i)]);
+#pragma omp parallel if (parallel)
+    {
+        BlockAssembler::Scratch s(n);
+#pragma omp for schedule(static)
+        for (std::int64_t j = 0; j < n; ++j) {
+            assembler.row(j, s, true);
+            for (int r = 0; r < 3; ++r) {
+                std::int64_t out = row_start[std::size_t(3 * j + r)];
+                for (std::size_t q = 0; q < s.columns.size(); ++q) {
+                    const std::int64_t c0 = 3 * std::int64_t(s.columns[q]);
+                    if (s.full[q]) {
+                        for (int c = 0; c < 3; ++c, ++out) {
+                            inner[out] = int(c0 + c);
+                            value[out] = s.block[q](r, c) + (c == r ? s.scalar[q] : 0.0);
+                        }
+                    } else {
+                        inner[out] = int(c0 + r);
+                        value[out] = s.scalar[q];
+                        ++out;
+                    }
                 }
             }
         }
@@ -180,18 +281,17 @@ RegularizationSystem assemble_regularization_system(const PointMatrix& positions
     validate_weights(weights, n, quads.rows());
     if (normals.rows() != quads.rows()) throw Error("normal field has " + std::to_string(normals.rows()) +
                                                     " vectors for " + std::to_string(quads.rows()) + " faces");
-    const ScalarRowMatrix scalar = coordinate_wise_part(links, weights, n);
-    const std::vector<Eigen::Matrix3d> blocks = alignment_blocks(scalar, quads, normals, weights);
-
     RegularizationSystem system;
-    system.matrix = expand_blocks(scalar, blocks);
+    system.matrix = assemble_matrix(quads, links, normals, weights, n);
     system.rhs.resize(3 * n);
-    system.constant = 0;
+    double constant = 0;
+#pragma omp parallel for schedule(static) reduction(+ : constant) if (n >= 4096)
     for (std::int64_t i = 0; i < n; ++i) {
         const double aw = weights.alpha * data_weight(weights, i);
         for (int d = 0; d < 3; ++d) system.rhs[3 * i + d] = aw * positions(i, d);
-        system.constant += aw * positions.row(i).squaredNorm();
+        constant += aw * positions.row(i).squaredNorm();
     }
+    system.constant = constant;
     return system;
 }
 
@@ -199,25 +299,31 @@ EnergyTerms regularization_energy(const PointMatrix& candidate, const PointMatri
                                   const VertexLinks& links, const PointMatrix& normals, const RegularizationWeights& weights) {
     const std::int64_t n = positions.rows();
     validate_weights(weights, n, quads.rows());
-    EnergyTerms terms;
+    double data = 0, fairness = 0, alignment = 0;
+#pragma omp parallel for schedule(static) reduction(+ : data, fairness) if (n >= 4096)
     for (std::int64_t i = 0; i < n; ++i) {
-        terms.data += data_weight(weights, i) * (candidate.row(i) - positions.row(i)).squaredNorm();
+        data += data_weight(weights, i) * (candidate.row(i) - positions.row(i)).squaredNorm();
         Eigen::RowVector3d barycenter = Eigen::RowVector3d::Zero();
         for (std::int64_t q = links.offsets[std::size_t(i)]; q < links.offsets[std::size_t(i + 1)]; ++q)
             barycenter += candidate.row(links.neighbors[std::size_t(q)]);
         if (links.size(i) > 0) barycenter /= double(links.size(i));
         else barycenter = candidate.row(i);
-        terms.fairness += fairness_weight(weights, i) * (candidate.row(i) - barycenter).squaredNorm();
+        fairness += fairness_weight(weights, i) * (candidate.row(i) - barycenter).squaredNorm();
     }
-    const Eigen::Index k = quads.cols();
-    for (Eigen::Index f = 0; f < quads.rows(); ++f) {
+    const Eigen::Index k = quads.cols(), m = quads.rows();
+#pragma omp parallel for schedule(static) reduction(+ : alignment) if (m >= 4096)
+    for (Eigen::Index f = 0; f < m; ++f) {
         double sum = 0;
         for (Eigen::Index e = 0; e < k; ++e) {
             const double d = (candidate.row(quads(f, e)) - candidate.row(quads(f, (e + 1) % k))).dot(normals.row(f));
             sum += d * d;
         }
-        terms.alignment += alignment_weight(weights, f) * sum;
+        alignment += alignment_weight(weights, f) * sum;
     }
+    EnergyTerms terms;
+    terms.data = data;
+    terms.fairness = fairness;
+    terms.alignment = alignment;
     return terms;
 }
 
