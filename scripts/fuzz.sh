@@ -3,7 +3,7 @@
 #
 #   scripts/fuzz.sh [SECONDS] [TARGET...]
 #
-# Builds them first (clang, ASan + UBSan + libFuzzer, -O1) in $BUILD_DIR (default build/sanitize, shared with scripts/sanitize.sh),
+# Builds them first (clang, ASan + UBSan + libFuzzer, -O1) in $BUILD_DIR (default build/fuzz),
 # unless SKIP_BUILD=1. Each target starts from the seed corpus written by the project's writers
 # (dsreg_fuzz_seeds) plus the committed regression corpus fuzz/regressions/<target>/; new
 # interesting inputs accumulate in $BUILD_DIR/corpus/<target>/ (kept between runs). A crash,
@@ -15,15 +15,17 @@ cd "$(dirname "$0")/.."
 seconds=${1:-60}
 shift || true
 [[ $seconds =~ ^[0-9]+$ ]] || { echo "usage: $0 [SECONDS] [TARGET...]" >&2; exit 2; }
-build=${BUILD_DIR:-build/sanitize}
+build=${BUILD_DIR:-build/fuzz}
 jobs=${JOBS:-2}
 all_targets=(vol longvol pgm3d raw polynomial normals obj off ply stl)
 targets=("${@:-${all_targets[@]}}")
 
 if [[ ${SKIP_BUILD:-0} != 1 ]]; then
     scripts/install-deps.sh --fuzz
-    BUILD_DIR=$build scripts/sanitize.sh --configure-only
+    start=$SECONDS
+    scripts/sanitize.sh --configure-fuzz "$build"
     cmake --build "$build" -j"$(nproc)" --target dsreg_fuzzers dsreg_fuzz_seeds
+    echo "fuzz: build $((SECONDS - start)) s"
 fi
 
 rm -rf "$build/seeds"
