@@ -436,30 +436,52 @@ std::vector<ExperimentCase> experiment_cases() {
             {"sphere1", make_shape("sphere1"), 0.0}};
 }
 
-TEST(Convergence, DigitalAndRegularizedSurfacesConvergeInOhAndRegularizedIsCloser) {
+/// The claims over 4 grid steps h = 0.2 … 0.05 (Fig. 7, α = 1e-5·h², β = 1, γ = 0):
+/// the digital surface is within √3/2·h of ∂X, p* is closer to ∂X than p at every h (L2 and
+/// L∞), and the p and p* errors decrease at least like h^0.9.
+void expect_paper_claims(const ExperimentCase& c, ConvergenceOptions options) {
     const std::vector<double> steps = geometric_steps(0.2, 0.05, 4);
-    for (const ExperimentCase& c : experiment_cases()) {
-        ConvergenceOptions options;  // exact normals, α = 1e-5·h², β = 1, γ = 0 (Fig. 7)
-        options.wall_margin = c.wall_margin;
-        std::vector<ConvergenceStep> results;
-        for (double h : steps) {
-            const ConvergenceStep s = run_convergence_step(c.shape, h, options);
-            SCOPED_TRACE(std::string(c.name) + " at h = " + std::to_string(h));
-            EXPECT_GT(s.vertices_evaluated, 50);
-            EXPECT_LT(s.relative_residual, 1e-6);
-            // Gauss digitization: the digital surface is within √3/2·h of ∂X (paper §2, [11]).
-            EXPECT_LE(s.p.linf, std::sqrt(3.0) / 2.0 * h);
-            // The paper's claim (Fig. 7, last row): p* is closer to ∂X than p.
-            EXPECT_LT(s.pstar.l2, s.p.l2);
-            EXPECT_LT(s.pstar.linf, s.p.linf);
-            results.push_back(s);
-        }
-        const ConvergenceSlopes slopes = convergence_slopes(results);
-        EXPECT_GE(slopes.p.l2, 0.9) << c.name;
-        EXPECT_GE(slopes.p.linf, 0.9) << c.name;
-        EXPECT_GE(slopes.pstar.l2, 0.9) << c.name;
-        EXPECT_GE(slopes.pstar.linf, 0.9) << c.name;
+    options.wall_margin = c.wall_margin;
+    std::vector<ConvergenceStep> results;
+    for (double h : steps) {
+        const ConvergenceStep s = run_convergence_step(c.shape, h, options);
+        SCOPED_TRACE(std::string(c.name) + " at h = " + std::to_string(h));
+        EXPECT_GT(s.vertices_evaluated, 50);
+        EXPECT_LT(s.relative_residual, 1e-6);
+        // Gauss digitization: the digital surface is within √3/2·h of ∂X (paper §2, [11]).
+        EXPECT_LE(s.p.linf, std::sqrt(3.0) / 2.0 * h);
+        // The paper's claim (Fig. 7, last row): p* is closer to ∂X than p.
+        EXPECT_LT(s.pstar.l2, s.p.l2);
+        EXPECT_LT(s.pstar.linf, s.p.linf);
+        results.push_back(s);
     }
+    const ConvergenceSlopes slopes = convergence_slopes(results);
+    EXPECT_GE(slopes.p.l2, 0.9) << c.name;
+    EXPECT_GE(slopes.p.linf, 0.9) << c.name;
+    EXPECT_GE(slopes.pstar.l2, 0.9) << c.name;
+    EXPECT_GE(slopes.pstar.linf, 0.9) << c.name;
+}
+
+TEST(Convergence, DigitalAndRegularizedSurfacesConvergeInOhAndRegularizedIsCloser) {
+    for (const ExperimentCase& c : experiment_cases()) expect_paper_claims(c, ConvergenceOptions{});  // exact normals
+}
+
+ConvergenceOptions integral_invariant_input() {
+    ConvergenceOptions options;
+    options.normals = InputNormalField::IntegralInvariant;
+    options.radius_k = 1.0;  // r = h^(1/3): 0.58 (2.9 voxels) at h = 0.2, 0.37 (7.4 voxels) at h = 0.05
+    return options;
+}
+
+TEST(Convergence, IntegralInvariantInputOnTheSphere) { expect_paper_claims(experiment_cases()[1], integral_invariant_input()); }
+
+// Fails (see docs/convergence.md): with II normals, γ = 0 and α = 1e-5·h², the plane part of the
+// clipped cube drifts along its normal as a whole (errors at the seams with the box walls, where
+// the II balls see the walls, are not held back by so small a data term), so p* is not closer
+// to ∂X than p at most steps. Kept, disabled, as the statement of the paper's claim that dsreg
+// does not reproduce for this input; run it with --gtest_also_run_disabled_tests.
+TEST(Convergence, DISABLED_IntegralInvariantInputOnTheTiltedPlane) {
+    expect_paper_claims(experiment_cases()[0], integral_invariant_input());
 }
 
 TEST(Convergence, IntegralInvariantFieldAndOptionChecks) {
