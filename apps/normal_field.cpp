@@ -78,6 +78,15 @@ void check_paths(const NormalFieldOptions& o) {
     }
 }
 
+/// --radius when given, else 3·h^(1/3) for a --shape; for a file 3 voxels, or 5 voxels for
+/// the biweight kernel of the integral invariants (its weights fade out towards the sphere, so
+/// it needs a larger support than the ball for as little noise: docs/accuracy.md).
+double field_radius(const NormalFieldOptions& o, const std::string& kind, const LoadedVolume& loaded) {
+    if (o.radius) return *o.radius;
+    const bool biweight = kind == "ii" && o.ii_kernel == "biweight";
+    return loaded.shape || !biweight ? default_ii_radius(loaded) : 5.0 * loaded.volume.grid.spacing.maxCoeff();
+}
+
 /// The input field g (or the whole field, without AT).
 PointMatrix estimate_input_field(const NormalFieldOptions& o, const LoadedVolume& loaded, const DigitalSurface& surface,
                                  NormalField& field) {
@@ -88,11 +97,16 @@ PointMatrix estimate_input_field(const NormalFieldOptions& o, const LoadedVolume
         return read_normals_file(o.file, surface);
     }
     if (kind == "ii" || kind == "ctrivial") {
-        field.radius = o.radius ? *o.radius : default_ii_radius(loaded);
+        field.radius = field_radius(o, kind, loaded);
         const std::string r = ", r = " + format("%g", *field.radius);
-        field.description = (kind == "ii" ? "integral invariants" : "convolved trivial normals") + r;
-        return kind == "ii" ? integral_invariant_normals(loaded.volume, surface, *field.radius)
-                            : convolved_trivial_normals(surface, *field.radius);
+        if (kind == "ctrivial") {
+            field.description = "convolved trivial normals" + r;
+            return convolved_trivial_normals(surface, *field.radius);
+        }
+        field.ii_kernel = o.ii_kernel;
+        field.description = "integral invariants (" + o.ii_kernel + " kernel)" + r;
+        return integral_invariant_normals(loaded.volume, surface, *field.radius,
+                                          parse_integral_invariant_kernel(o.ii_kernel));
     }
     if (kind == "exact") {
         field.description = "exact normals";
@@ -130,7 +144,13 @@ void add_normal_field_options(CLI::App& cmd, NormalFieldOptions& o) {
             ->check(CLI::IsMember({"ii", "trivial", "ctrivial", "exact", "at"}))
             ->capture_default_str();
     cmd.add_option("--radius", o.radius,
-                   "Radius of ii and ctrivial, physical units (default: 3 voxels for files, 3·h^(1/3) for --shape)");
+                   "Radius of ii and ctrivial, physical units (default: 3·h^(1/3) for --shape; for files 3 voxels, "
+                   "or 5 voxels for ii with the biweight kernel)");
+    cmd.add_option("--ii-kernel", o.ii_kernel,
+                   "Weights of the integral-invariant ball: biweight (1 - d^2/r^2)^2, smooth, more accurate "
+                   "(docs/accuracy.md), or ball (uniform, the paper's integral invariants)")
+        ->check(CLI::IsMember({"ball", "biweight"}))
+        ->capture_default_str();
     cmd.add_option("--normals-file", o.file,
                    "Read the normal field from this text file (lines 'i j k direction nx ny nz', see "
                    "docs/ambrosio-tortorelli.md); with --normals at, the field to regularize");

@@ -18,6 +18,7 @@ struct NormalFieldOptions {
     std::string kind = "ii";      ///< --normals: ii trivial ctrivial exact at
     std::string at_input = "ii";  ///< --at-input: the field g that AT regularizes
     std::optional<double> radius;
+    std::string ii_kernel = "biweight";  ///< --ii-kernel: ball or biweight
     std::string file;             ///< --normals-file: g (with --normals at) or the field itself
     AmbrosioTortorelliParameters at;
     std::string at_epsilon = "2:0.25";  ///< --at-eps ε1:ε2 (or a single ε)
@@ -41,6 +42,7 @@ struct NormalField {
     std::string description;                      ///< e.g. "integral invariants, r = 3"
     std::string input;                            ///< ii, trivial, ctrivial, exact or file (g for AT)
     std::optional<double> radius;                 ///< radius used, if any
+    std::optional<std::string> ii_kernel;         ///< kernel of the integral invariants, if used
     std::optional<AmbrosioTortorelliResult> at;  ///< set for --normals at
 };
 

@@ -95,6 +95,7 @@ nlohmann::json make_report(const RegularizeOptions& o, const LoadedVolume& loade
                             {"connectivity", o.connectivity}, {"normals", o.normals.kind},
                             {"normals_input", field.input},
                             {"radius", field.radius ? nlohmann::json(*field.radius) : nlohmann::json(nullptr)},
+                            {"ii_kernel", field.ii_kernel ? nlohmann::json(*field.ii_kernel) : nlohmann::json(nullptr)},
                             {"solver", result.solve.solver}, {"triangulate", o.triangulate}};
     if (field.at) report["at"] = at_report(o.normals, field, surface);
     report["solve"] = {{"relative_residual", result.solve.relative_residual},

@@ -15,8 +15,10 @@ double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
     return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180.0 / M_PI;
 }
 
-/// Brute force: covariance of all object voxel centres within distance r of c.
-Eigen::Vector3d brute_force_ii_normal(const BinaryVolume& v, const Eigen::Vector3d& c, double r) {
+/// Brute force: weighted covariance of all object voxel centres within distance r of c, with
+/// weight 1 (ball) or (1 − d²/r²)² (biweight).
+Eigen::Vector3d brute_force_ii_normal(const BinaryVolume& v, const Eigen::Vector3d& c, double r,
+                                      IntegralInvariantKernel kernel) {
     double n = 0;
     Eigen::Vector3d s1 = Eigen::Vector3d::Zero();
     Eigen::Matrix3d s2 = Eigen::Matrix3d::Zero();
@@ -25,9 +27,11 @@ Eigen::Vector3d brute_force_ii_normal(const BinaryVolume& v, const Eigen::Vector
             for (std::int64_t i = 0; i < v.grid.dims[0]; ++i) {
                 const Eigen::Vector3d x = v.grid.voxel_center(i, j, k) - c;
                 if (!v.inside(i, j, k) || x.squaredNorm() > r * r) continue;
-                n += 1;
-                s1 += x;
-                s2 += x * x.transpose();
+                const double q = 1.0 - x.squaredNorm() / (r * r);
+                const double w = kernel == IntegralInvariantKernel::ball ? 1.0 : q * q;
+                n += w;
+                s1 += w * x;
+                s2 += w * x * x.transpose();
             }
     const Eigen::Vector3d mean = s1 / n;
     const Eigen::Matrix3d cov = s2 / n - mean * mean.transpose();
@@ -53,13 +57,44 @@ TEST(Normals, RowSumsEqualBruteForceOnAnisotropicGrid) {
     v.grid.origin = Eigen::Vector3d(-3.0, 2.0, 0.25);
     const auto s = extract_digital_surface(v, Connectivity::TwentySix);
     const double r = 2.3;
-    const PointMatrix u = integral_invariant_normals(v, s, r);
     const PointMatrix c = surfel_centers(s);
-    for (std::int64_t f = 0; f < s.face_count(); f += 7) {
-        const Eigen::Vector3d expected = brute_force_ii_normal(v, c.row(f).transpose(), r);
-        // Same sums up to rounding (exact integers vs floating point), amplified by small eigen-gaps.
-        EXPECT_LT(angle_deg(u.row(f).transpose(), expected), 1e-4) << "face " << f;
+    for (IntegralInvariantKernel kernel : {IntegralInvariantKernel::ball, IntegralInvariantKernel::biweight}) {
+        const PointMatrix u = integral_invariant_normals(v, s, r, kernel);
+        for (std::int64_t f = 0; f < s.face_count(); f += 7) {
+            const Eigen::Vector3d expected = brute_force_ii_normal(v, c.row(f).transpose(), r, kernel);
+            // Same sums up to rounding (row tables vs direct sums), amplified by small eigen-gaps.
+            EXPECT_LT(angle_deg(u.row(f).transpose(), expected), 1e-4) << kernel_name(kernel) << " face " << f;
+        }
     }
+}
+
+/// Mean angle between a field and the true normals of a digitized shape.
+double mean_error_deg(const PointMatrix& u, const PointMatrix& truth) {
+    double sum = 0;
+    for (std::int64_t f = 0; f < u.rows(); ++f) sum += angle_deg(u.row(f).transpose(), truth.row(f).transpose());
+    return sum / double(u.rows());
+}
+
+TEST(Normals, BiweightKernelIsCloserToTheTrueNormalsThanTheBall) {
+    // Goursat at h = 0.25, r = 3·h^(1/3) = 7.56 voxels (the reference set-up of docs/accuracy.md):
+    // the ball field is 1.32° off, mostly from the curvature variation across the ball (O(r²));
+    // the biweight weighs the nearer voxels more and fades out those entering or leaving the ball.
+    const ImplicitShape shape = make_shape("goursat");
+    const double h = 0.25, r = 3.0 * std::cbrt(h);
+    const BinaryVolume volume = digitize(shape, h);
+    const DigitalSurface s = extract_digital_surface(volume, Connectivity::TwentySix);
+    const PointMatrix truth = exact_normals(shape, s);
+    const double ball = mean_error_deg(integral_invariant_normals(volume, s, r, IntegralInvariantKernel::ball), truth);
+    const double biweight =
+        mean_error_deg(integral_invariant_normals(volume, s, r, IntegralInvariantKernel::biweight), truth);
+    EXPECT_LT(biweight, 0.85 * ball) << "ball " << ball << "°, biweight " << biweight << "°";
+    EXPECT_LT(biweight, 1.0);
+}
+
+TEST(Normals, KernelNamesRoundTrip) {
+    for (IntegralInvariantKernel kernel : {IntegralInvariantKernel::ball, IntegralInvariantKernel::biweight})
+        EXPECT_EQ(parse_integral_invariant_kernel(kernel_name(kernel)), kernel);
+    EXPECT_THROW(parse_integral_invariant_kernel("gauss"), Error);
 }
 
 TEST(Normals, IntegralInvariantsOnABallPointRadially) {
@@ -115,6 +150,7 @@ TEST(Normals, RadiusMustBePositive) {
     EXPECT_THROW(integral_invariant_normals(ball, s, 0.0), Error);
     EXPECT_THROW(integral_invariant_normals(ball, s, -1.0), Error);
     EXPECT_THROW(integral_invariant_normals(ball, s, std::nan("")), Error);
+    EXPECT_THROW(integral_invariant_normals(ball, s, 500.0), Error);  // tables of 500³ voxels: refused
 }
 
 }  // namespace

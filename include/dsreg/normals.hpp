@@ -3,6 +3,7 @@
 // All fields are oriented outward (from object to background) and are returned as an m×3
 // matrix whose row f is the normal of face f of the DigitalSurface.
 #pragma once
+#include <string>
 
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/implicit_shape.hpp"
@@ -21,13 +22,30 @@ PointMatrix trivial_normals(const DigitalSurface& surface);
 /// radius is not positive and finite.
 PointMatrix convolved_trivial_normals(const DigitalSurface& surface, double radius);
 
+/// The weight of a voxel of the integral-invariant ball B_r(c), as a function of the distance d
+/// of its centre to c.
+enum class IntegralInvariantKernel {
+    ball,      ///< 1 inside the ball: the paper's integral invariants (indicator of B_r)
+    biweight,  ///< (1 − d²/r²)²: smooth, zero on the sphere. Voxels entering or leaving the
+               ///< ball no longer jump the moments, and the nearer voxels count more: on goursat
+               ///< at h = 0.25, r = 1.89, the field is 0.95° off the true normals instead of 1.32°
+               ///< (docs/accuracy.md).
+};
+
+/// "ball" / "biweight", and back (throws dsreg::Error naming the accepted names).
+std::string kernel_name(IntegralInvariantKernel kernel);
+IntegralInvariantKernel parse_integral_invariant_kernel(const std::string& name);
+
 /// Integral-invariant normals (Pottmann et al.; the paper's ref. [5]): for each surfel centre c,
-/// the covariance matrix of the centres of the object voxels whose centre lies in the ball
-/// B_r(c) (radius in physical units). The normal is the eigenvector of its smallest eigenvalue,
-/// oriented from the centroid of those voxels towards c. Cost: O(r²/h²) per surfel (the ball is
-/// cut into voxel rows, each row summed in closed form over its runs of object voxels).
-/// Throws dsreg::Error if radius is not positive and finite.
-PointMatrix integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface, double radius);
+/// the weighted covariance matrix of the centres of the object voxels whose centre lies in the
+/// ball B_r(c) (radius in physical units; weights given by `kernel`). The normal is the
+/// eigenvector of its smallest eigenvalue, oriented from the weighted centroid of those voxels
+/// towards c. Cost: O(r²/h²) per surfel (the ball is cut into voxel rows that carry running
+/// sums of the weights; each row is summed over its runs of object voxels with two look-ups per
+/// run), plus tables of O(r³/h³) entries. Throws dsreg::Error if radius is not positive and
+/// finite, or spans so many voxels (about 100) that the tables would exceed 768 MiB.
+PointMatrix integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface, double radius,
+                                       IntegralInvariantKernel kernel = IntegralInvariantKernel::biweight);
 
 /// Ground truth for digitized implicit shapes: the true normal ∇F/|∇F| at the closest point of
 /// {F = 0} to each surfel centre (positions in the shape's physical coordinates).

@@ -1,11 +1,11 @@
-// Integral-invariant normals (the paper's ref. [5]) by exact integer moment sums.
+// Integral-invariant normals (the paper's ref. [5]) by weighted moment sums along voxel rows.
 //
 // For a surfel of voxel v with normal sign·e_a, the voxel centres inside the ball B_r(c) of its
 // centre c = centre(v) + sign·(s_a/2)·e_a are, relative to v, the same lattice offsets
 // (t, dj, dk) for every surfel of the same direction. So the ball is cut once per direction into
-// rows {(dj, dk), t ∈ [t_lo, t_hi]} (a "stencil"), and each surfel sums the object voxels of each
-// row over the row's runs of object voxels in closed form: integer sums of 1, t, t², exact,
-// with no square root or rounding per surfel. Cost O(r²/h²) per surfel, memory ∝ surface.
+// rows {(dj, dk), t ∈ [t_lo, t_hi]} (a "stencil") that carry the running sums of w, w·t, w·t²
+// of the kernel weight w; each surfel then sums each row over its runs of object voxels with
+// two table look-ups per run. Cost O(r²/h²) per surfel; memory ∝ surface + O(r³/h³) tables.
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -49,21 +49,42 @@ RowRuns build_row_runs(const BinaryVolume& volume) {
     return result;
 }
 
-/// One row of a ball stencil: offsets (dj, dk) and the x offsets t ∈ [t_lo, t_hi] inside.
+/// The kernel weight of a voxel centre at squared distance d2 (in units of r²) from the ball
+/// centre, d2 ≤ 1.
+double kernel_weight(IntegralInvariantKernel kernel, double d2) {
+    if (kernel == IntegralInvariantKernel::ball) return 1.0;
+    const double q = 1.0 - d2;  // biweight (1 − |x−c|²/r²)²: continuous, zero on the sphere
+    return q * q;
+}
+
+/// Weighted sums over a prefix of a stencil row: Σ w, Σ w·t, Σ w·t².
+struct RowSums {
+    double w = 0, wt = 0, wtt = 0;
+};
+
+/// One row of a ball stencil: offsets (dj, dk), the x offsets t ∈ [t_lo, t_hi] inside the ball,
+/// and `prefix` such that prefix[i] sums t_lo … t_lo + i − 1 (t_hi − t_lo + 2 entries).
 struct StencilRow {
     std::int32_t dj, dk, t_lo, t_hi;
+    std::int64_t prefix;  ///< index of the row's first entry in Stencil::prefix_sums
+};
+
+struct Stencil {
+    std::vector<StencilRow> rows;
+    std::vector<RowSums> prefix_sums;
 };
 
 /// Rows of lattice offsets whose voxel centre lies in B_r(c) for a surfel of direction
-/// (axis, sign), c being offset by sign·s_axis/2 along the axis from its voxel's centre.
-std::vector<StencilRow> ball_stencil(const Eigen::Vector3d& spacing, int axis, int sign, double r) {
+/// (axis, sign), c being offset by sign·s_axis/2 along the axis from its voxel's centre, with
+/// the running sums of each row's kernel weights.
+Stencil ball_stencil(const Eigen::Vector3d& spacing, int axis, int sign, double r, IntegralInvariantKernel kernel) {
     Eigen::Vector3d shift = Eigen::Vector3d::Zero();  // c − centre(v)
     shift[axis] = 0.5 * sign * spacing[axis];
     auto range = [&](int d, double half) {  // integer offsets q with |q·s_d − shift_d| ≤ half
         return std::make_pair(std::int32_t(std::ceil((shift[d] - half) / spacing[d])),
                               std::int32_t(std::floor((shift[d] + half) / spacing[d])));
     };
-    std::vector<StencilRow> rows;
+    Stencil stencil;
     const auto [k0, k1] = range(2, r);
     for (std::int32_t dk = k0; dk <= k1; ++dk) {
         const double z = dk * spacing.z() - shift.z();
@@ -74,52 +95,62 @@ std::vector<StencilRow> ball_stencil(const Eigen::Vector3d& spacing, int axis, i
             const double rest = r * r - z * z - y * y;
             if (rest < 0) continue;
             const auto [t0, t1] = range(0, std::sqrt(rest));
-            if (t0 <= t1) rows.push_back({dj, dk, t0, t1});
+            if (t0 > t1) continue;
+            stencil.rows.push_back({dj, dk, t0, t1, std::int64_t(stencil.prefix_sums.size())});
+            RowSums sum;
+            stencil.prefix_sums.push_back(sum);
+            for (std::int32_t t = t0; t <= t1; ++t) {
+                const double x = t * spacing.x() - shift.x();
+                const double w = kernel_weight(kernel, std::min(1.0, (x * x + y * y + z * z) / (r * r)));
+                sum.w += w;
+                sum.wt += w * t;
+                sum.wtt += w * double(t) * t;
+                stencil.prefix_sums.push_back(sum);
+            }
         }
     }
-    return rows;
+    return stencil;
 }
 
-/// Exact integer moments of the lattice offsets (t, dj, dk) of the object voxels in a ball.
+/// Weighted moments of the lattice offsets (t, dj, dk) of the object voxels in a ball.
 struct LatticeMoments {
-    std::int64_t n = 0;
-    std::int64_t st = 0, sj = 0, sk = 0;                     // first moments
-    std::int64_t stt = 0, sjj = 0, skk = 0, stj = 0, stk = 0, sjk = 0;  // second moments
+    double n = 0;
+    double st = 0, sj = 0, sk = 0;                            // first moments
+    double stt = 0, sjj = 0, skk = 0, stj = 0, stk = 0, sjk = 0;  // second moments
 };
 
-inline std::int64_t sum_to(std::int64_t k) { return k * (k + 1) / 2; }                  // Σ_{t≤k} t, up to a constant
-inline std::int64_t sum_sq_to(std::int64_t k) { return k * (k + 1) * (2 * k + 1) / 6; }  // Σ_{t≤k} t², idem
-
-LatticeMoments ball_moments(const BinaryVolume& volume, const RowRuns& rows, const Surfel& s,
-                            const std::vector<StencilRow>& stencil) {
+LatticeMoments ball_moments(const BinaryVolume& volume, const RowRuns& rows, const Surfel& s, const Stencil& stencil) {
     const auto& d = volume.grid.dims;
     const std::int64_t i0 = s.voxel[0], j0 = s.voxel[1], k0 = s.voxel[2];
     LatticeMoments m;
-    for (const StencilRow& row : stencil) {
+    for (const StencilRow& row : stencil.rows) {
         const std::int64_t j = j0 + row.dj, k = k0 + row.dk;
         if (j < 0 || k < 0 || j >= d[1] || k >= d[2]) continue;
         const std::int64_t id = j + d[1] * k;
-        std::int64_t n = 0, st = 0, stt = 0;
+        const RowSums* prefix = stencil.prefix_sums.data() + row.prefix;
+        RowSums sum;
         for (std::int64_t q = rows.row_first[std::size_t(id)]; q < rows.row_first[std::size_t(id + 1)]; ++q) {
             const auto& run = rows.runs[std::size_t(q)];
             const std::int64_t lo = std::max<std::int64_t>(run[0] - i0, row.t_lo);
             const std::int64_t hi = std::min<std::int64_t>(run[1] - i0, row.t_hi);
             if (lo > hi) continue;
-            n += hi - lo + 1;
-            st += sum_to(hi) - sum_to(lo - 1);  // polynomial identities: valid for negative bounds too
-            stt += sum_sq_to(hi) - sum_sq_to(lo - 1);
+            const RowSums& a = prefix[lo - row.t_lo];
+            const RowSums& b = prefix[hi - row.t_lo + 1];
+            sum.w += b.w - a.w;
+            sum.wt += b.wt - a.wt;
+            sum.wtt += b.wtt - a.wtt;
         }
-        if (n == 0) continue;
-        m.n += n;
-        m.st += st;
-        m.stt += stt;
-        m.sj += n * row.dj;
-        m.sk += n * row.dk;
-        m.sjj += n * row.dj * row.dj;
-        m.skk += n * row.dk * row.dk;
-        m.sjk += n * row.dj * row.dk;
-        m.stj += st * row.dj;
-        m.stk += st * row.dk;
+        if (sum.w == 0) continue;
+        m.n += sum.w;
+        m.st += sum.wt;
+        m.stt += sum.wtt;
+        m.sj += sum.w * row.dj;
+        m.sk += sum.w * row.dk;
+        m.sjj += sum.w * row.dj * row.dj;
+        m.skk += sum.w * row.dk * row.dk;
+        m.sjk += sum.w * row.dj * row.dk;
+        m.stj += sum.wt * row.dj;
+        m.stk += sum.wt * row.dk;
     }
     return m;
 }
@@ -128,13 +159,13 @@ LatticeMoments ball_moments(const BinaryVolume& volume, const RowRuns& rows, con
 /// centres (spacing ⊙ offsets), oriented from their centroid towards the surfel centre.
 Eigen::Vector3d normal_from_moments(const LatticeMoments& m, const Surfel& s, const Eigen::Vector3d& spacing) {
     const Eigen::Vector3d fallback = s.trivial_normal();
-    if (m.n == 0) return fallback;
-    const double n = double(m.n);
-    const Eigen::Vector3d mean(double(m.st) / n, double(m.sj) / n, double(m.sk) / n);  // lattice units
+    if (!(m.n > 0)) return fallback;
+    const double n = m.n;
+    const Eigen::Vector3d mean(m.st / n, m.sj / n, m.sk / n);  // lattice units
     Eigen::Matrix3d second;
-    second << double(m.stt), double(m.stj), double(m.stk),  //
-        double(m.stj), double(m.sjj), double(m.sjk),          //
-        double(m.stk), double(m.sjk), double(m.skk);
+    second << m.stt, m.stj, m.stk,  //
+        m.stj, m.sjj, m.sjk,          //
+        m.stk, m.sjk, m.skk;
     const Eigen::Matrix3d lattice_cov = second / n - mean * mean.transpose();
     const Eigen::Matrix3d cov = spacing.asDiagonal() * lattice_cov * spacing.asDiagonal();
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
@@ -148,18 +179,40 @@ Eigen::Vector3d normal_from_moments(const LatticeMoments& m, const Surfel& s, co
     return normal;
 }
 
+/// Entries of the six stencils' row tables for a ball of `radius` (an upper bound, before any
+/// allocation): about 4/3·π·r³ voxels plus one entry per row, per direction.
+double stencil_table_entries(const Eigen::Vector3d& spacing, double radius) {
+    const Eigen::Vector3d reach = (radius / spacing.array() + 1.0).matrix();
+    return 6.0 * (4.0 / 3.0 * M_PI * reach.prod() + M_PI * reach.y() * reach.z());
+}
+
 }  // namespace
 
-PointMatrix integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface, double radius) {
+std::string kernel_name(IntegralInvariantKernel kernel) {
+    return kernel == IntegralInvariantKernel::ball ? "ball" : "biweight";
+}
+
+IntegralInvariantKernel parse_integral_invariant_kernel(const std::string& name) {
+    if (name == "ball") return IntegralInvariantKernel::ball;
+    if (name == "biweight") return IntegralInvariantKernel::biweight;
+    throw Error("unknown integral-invariant kernel '" + name + "' (expected ball or biweight)");
+}
+
+PointMatrix integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface, double radius,
+                                       IntegralInvariantKernel kernel) {
     if (!(radius > 0) || !std::isfinite(radius))
         throw Error("integral invariant radius must be positive and finite (got " + std::to_string(radius) + ")");
     const Eigen::Vector3d& spacing = volume.grid.spacing;
-    if ((radius / spacing.array()).maxCoeff() > 2000)
-        throw Error("integral invariant radius " + std::to_string(radius) + " spans more than 2000 voxels (integer moment sums would overflow)");
+    constexpr double max_table_entries = double(1 << 25);  // 768 MiB of row sums
+    if (stencil_table_entries(spacing, radius) > max_table_entries)
+        throw Error("integral invariant radius " + std::to_string(radius) + " spans " +
+                    std::to_string(std::lround((radius / spacing.array()).maxCoeff())) +
+                    " voxels: its ball tables would exceed 768 MiB (use a radius below about 100 voxels)");
     const RowRuns rows = build_row_runs(volume);
-    std::vector<StencilRow> stencils[3][2];
+    Stencil stencils[3][2];
     for (int axis = 0; axis < 3; ++axis)
-        for (int side = 0; side < 2; ++side) stencils[axis][side] = ball_stencil(spacing, axis, side ? 1 : -1, radius);
+        for (int side = 0; side < 2; ++side)
+            stencils[axis][side] = ball_stencil(spacing, axis, side ? 1 : -1, radius, kernel);
     PointMatrix u(surface.face_count(), 3);
 #pragma omp parallel for schedule(dynamic, 256)
     for (std::int64_t f = 0; f < surface.face_count(); ++f) {
