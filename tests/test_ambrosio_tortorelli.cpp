@@ -33,7 +33,7 @@ struct RotatedCube {
     const Eigen::Matrix3d rotation = Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
     BinaryVolume volume;
     DigitalSurface surface;
-    PointMatrix ii;  ///< integral invariants, r = 3 voxels
+    PointMatrix ii;  ///< integral invariants of the paper (uniform ball), r = 3 voxels
     AmbrosioTortorelliResult at;
 
     RotatedCube() {
@@ -41,7 +41,7 @@ struct RotatedCube {
             return local(Eigen::Vector3d(x, y, z)).cwiseAbs().maxCoeff() <= half;
         });
         surface = extract_digital_surface(volume, Connectivity::TwentySix);
-        ii = integral_invariant_normals(volume, surface, 3.0);
+        ii = integral_invariant_normals(volume, surface, 3.0, IntegralInvariantKernel::ball);
         at = ambrosio_tortorelli_normals(surface, ii, AmbrosioTortorelliParameters{});
     }
 
