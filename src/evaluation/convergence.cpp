@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <unordered_map>
 
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
@@ -86,6 +87,58 @@ void measure_faces(const ImplicitShape& shape, const DigitalSurface& surface, co
     step.normal = norms_of(std::move(differences));
 }
 
+/// Integral-invariant input field of the experiment. For a shape without clipped axes: the II
+/// normals of the digitized object. For a clipped shape (e.g. the plane in [-1,1]³), the box is
+/// only there to make the object finite, so:
+///  * a face on a clipped box wall gets the wall's normal, as in solid_exact_normals();
+///  * every other face gets the II normal computed in the digitization of the same shape in a
+///    box enlarged by r + 2h along the clipped axes, so that no ball sees the walls. (Measured on
+///    the plane at h = 0.05: with balls truncated by the walls, the faces within r of the walls
+///    get biased normals, and with α = 1e-5·h² the plane part drifts as a whole along its normal,
+///    by about 0.55·h on average, farther than the digital surface; with exact normals on those
+///    faces only, 0.006·h. See docs/convergence.md.)
+/// Each face of the first kind is the same surfel (same voxel, same side) in both digitizations:
+/// its voxel is inside both, and the voxel across it is outside because F > 0 there.
+PointMatrix integral_invariant_input(const ImplicitShape& shape, const BinaryVolume& volume, const DigitalSurface& surface,
+                                     double radius, double h, Connectivity connectivity) {
+    if (!(shape.clipped[0] || shape.clipped[1] || shape.clipped[2]))
+        return integral_invariant_normals(volume, surface, radius);
+    ImplicitShape unclipped = shape;
+    for (int a = 0; a < 3; ++a)
+        if (shape.clipped[std::size_t(a)]) unclipped.lower[a] -= radius + 2 * h, unclipped.upper[a] += radius + 2 * h;
+    const BinaryVolume wide = digitize(unclipped, h);
+    const DigitalSurface wide_surface = extract_digital_surface(wide, connectivity);
+    const PointMatrix wide_u = integral_invariant_normals(wide, wide_surface, radius);
+
+    // Surfel key: voxel index in the wide grid, axis and side.
+    const auto key = [&](std::int64_t i, std::int64_t j, std::int64_t k, int axis, int sign) {
+        return ((std::uint64_t(i) * std::uint64_t(wide.grid.dims[1]) + std::uint64_t(j)) * std::uint64_t(wide.grid.dims[2]) +
+                std::uint64_t(k)) * 6u + std::uint64_t(2 * axis + (sign > 0 ? 1 : 0));
+    };
+    std::unordered_map<std::uint64_t, std::int64_t> wide_face;
+    wide_face.reserve(std::size_t(wide_surface.face_count()));
+    for (std::int64_t f = 0; f < wide_surface.face_count(); ++f) {
+        const Surfel& s = wide_surface.surfels[std::size_t(f)];
+        wide_face.emplace(key(s.voxel[0], s.voxel[1], s.voxel[2], s.axis, s.sign), f);
+    }
+    PointMatrix u(surface.face_count(), 3);
+    for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+        const Surfel& s = surface.surfels[std::size_t(f)];
+        if (is_box_wall_face(shape, surface.grid, s)) {
+            u.row(f) = s.trivial_normal().transpose();
+            continue;
+        }
+        const Eigen::Vector3d centre = surface.grid.voxel_center(s.voxel[0], s.voxel[1], s.voxel[2]);
+        const Eigen::Vector3d index = ((centre - wide.grid.origin).array() / h).round().matrix();
+        const auto found = wide_face.find(key(std::int64_t(index[0]), std::int64_t(index[1]), std::int64_t(index[2]), s.axis, s.sign));
+        if (found == wide_face.end())
+            throw Error("convergence: internal error: a face of '" + shape.name + "' at h = " + std::to_string(h) +
+                        " has no counterpart in the digitization of the enlarged box");
+        u.row(f) = wide_u.row(found->second);
+    }
+    return u;
+}
+
 }  // namespace
 
 PointMatrix solid_exact_normals(const ImplicitShape& shape, const DigitalSurface& surface) {
@@ -114,15 +167,7 @@ ConvergenceStep run_convergence_step(const ImplicitShape& shape, double h, const
     PointMatrix u;
     if (options.normals == InputNormalField::IntegralInvariant) {
         step.radius = options.radius_k * std::cbrt(h);
-        u = integral_invariant_normals(volume, surface, step.radius);
-        // The faces on a clipped box wall are not part of the shape: they get the wall's normal,
-        // as in solid_exact_normals(). With II normals there, rounded over r at every box edge,
-        // no closed surface is aligned with u, and with α ~ h² the whole box deforms (the plane
-        // part drifted by more than h along its normal in [-1,1]³).
-        detail::parallel_for_checked(surface.face_count(), [&](std::int64_t f) {
-            const Surfel& s = surface.surfels[std::size_t(f)];
-            if (is_box_wall_face(shape, surface.grid, s)) u.row(f) = s.trivial_normal().transpose();
-        });
+        u = integral_invariant_input(shape, volume, surface, step.radius, h, options.connectivity);
     } else {
         u = solid_exact_normals(shape, surface);
     }
