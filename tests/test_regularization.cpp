@@ -169,10 +169,11 @@ TEST(Regularization, GradientVanishesAtTheSolutionForEverySolver) {
     for (const std::string& name : solver_names()) {
         SolverOptions options;
         options.kind = parse_solver_kind(name);
+        options.max_error_voxels = kDefaultMaxErrorVoxels;  // as the dsreg command does
         const RegularizationResult r = regularize(x.surface, x.normals, w, options);
         const Eigen::VectorXd gradient = 2 * (s.matrix * flatten_points(r.positions) - s.rhs);
-        EXPECT_LT(gradient.norm(), 1e-8 * s.rhs.norm()) << name;
-        EXPECT_LT(r.solve.relative_residual, 1e-8) << name;
+        EXPECT_LT(gradient.norm(), 1e-6 * s.rhs.norm()) << name;
+        EXPECT_LE(r.solve.error_bound, kDefaultMaxErrorVoxels * x.surface.grid.spacing.minCoeff()) << name;
         // A minimum: any perturbation raises the energy.
         const double e_star = r.energy_after.total(w);
         for (unsigned seed = 0; seed < 3; ++seed)
@@ -181,7 +182,7 @@ TEST(Regularization, GradientVanishesAtTheSolutionForEverySolver) {
                           .total(w),
                       e_star);
         if (reference.size() == 0) reference = r.positions;
-        EXPECT_LT((r.positions - reference).cwiseAbs().maxCoeff(), 1e-6) << name << " disagrees with cholmod";
+        EXPECT_LT((r.positions - reference).rowwise().norm().maxCoeff(), 1e-4) << name << " disagrees with cholmod (1e-4 voxel)";
     }
 }
 

@@ -67,6 +67,10 @@ RegularizationSystem assemble_regularization_system(const PointMatrix& positions
                                                      const VertexLinks& links, const PointMatrix& normals,
                                                      const RegularizationWeights& weights);
 
+/// α · min_i α_i w0_i: the data term alone bounds the smallest eigenvalue of R from below (R is
+/// αW0_α ⊗ I3 plus positive semi-definite terms, eq. 25).
+double smallest_eigenvalue_bound(const RegularizationWeights& weights, std::int64_t vertex_count);
+
 /// Evaluates the terms of eq. (1) face by face and vertex by vertex (no matrices).
 EnergyTerms regularization_energy(const PointMatrix& candidate, const PointMatrix& positions, const FaceMatrix& quads,
                                   const VertexLinks& links, const PointMatrix& normals, const RegularizationWeights& weights);

@@ -10,21 +10,29 @@ namespace dsreg::detail {
 namespace {
 
 /// Builds a block matrix row by row in parallel (Gustavson): `fill_row(i, block)` adds into
-/// `block(j)`, a zero-initialized 3×3 accumulator for column j of row i. Each thread fills a
-/// contiguous range of rows; the pieces are then concatenated in row order.
-template <class FillRow>
-BlockMatrix build_by_rows(std::int64_t rows, std::int64_t cols, FillRow fill_row) {
+/// `block(j)`, a zero-initialized 3×3 accumulator for column j of row i; `row_bound(i)` is an upper
+/// bound on the blocks of row i. Each thread fills a contiguous range of rows into a piece reserved
+/// from the bounds (no reallocation: memory is touched once), then copies it into place.
+template <class FillRow, class RowBound>
+BlockMatrix build_by_rows(std::int64_t rows, std::int64_t cols, FillRow fill_row, RowBound row_bound) {
     const int threads = rows >= kParallelMinRows ? omp_get_max_threads() : 1;
-    std::vector<std::vector<std::int32_t>> piece_columns(static_cast<std::size_t>(threads));
-    std::vector<std::vector<Eigen::Matrix3d>> piece_blocks(static_cast<std::size_t>(threads));
     std::vector<std::int64_t> row_count(static_cast<std::size_t>(rows), 0);
+    std::vector<std::int64_t> piece_first(static_cast<std::size_t>(threads) + 1, 0);
+    BlockMatrix out;
+    out.rows = rows;
+    out.cols = cols;
+    out.start.assign(std::size_t(rows + 1), 0);
 #pragma omp parallel num_threads(threads)
     {
         const int t = omp_get_thread_num(), nt = omp_get_num_threads();
         const std::int64_t first = rows * t / nt, last = rows * (t + 1) / nt;
         std::vector<std::int32_t> slot(static_cast<std::size_t>(cols), -1);
-        auto& columns = piece_columns[std::size_t(t)];
-        auto& blocks = piece_blocks[std::size_t(t)];
+        std::int64_t bound = 0;
+        for (std::int64_t i = first; i < last; ++i) bound += std::min<std::int64_t>(row_bound(i), cols);
+        std::vector<std::int32_t> columns;
+        std::vector<Eigen::Matrix3d> blocks;
+        columns.reserve(std::size_t(bound));
+        blocks.reserve(std::size_t(bound));
         for (std::int64_t i = first; i < last; ++i) {
             const std::size_t row_begin = columns.size();
             const auto block = [&](std::int32_t j) -> Eigen::Matrix3d& {
@@ -40,19 +48,17 @@ BlockMatrix build_by_rows(std::int64_t rows, std::int64_t cols, FillRow fill_row
             for (std::size_t q = row_begin; q < columns.size(); ++q) slot[std::size_t(columns[q])] = -1;
             row_count[std::size_t(i)] = std::int64_t(columns.size() - row_begin);
         }
-    }
-    BlockMatrix out;
-    out.rows = rows;
-    out.cols = cols;
-    out.start.assign(std::size_t(rows + 1), 0);
-    for (std::int64_t i = 0; i < rows; ++i) out.start[std::size_t(i + 1)] = out.start[std::size_t(i)] + row_count[std::size_t(i)];
-    out.column.reserve(std::size_t(out.start.back()));
-    out.block.reserve(std::size_t(out.start.back()));
-    for (int t = 0; t < threads; ++t) {  // pieces hold consecutive row ranges, in thread order
-        out.column.insert(out.column.end(), piece_columns[std::size_t(t)].begin(), piece_columns[std::size_t(t)].end());
-        out.block.insert(out.block.end(), piece_blocks[std::size_t(t)].begin(), piece_blocks[std::size_t(t)].end());
-        std::vector<std::int32_t>().swap(piece_columns[std::size_t(t)]);
-        std::vector<Eigen::Matrix3d>().swap(piece_blocks[std::size_t(t)]);
+        piece_first[std::size_t(t) + 1] = std::int64_t(columns.size());
+#pragma omp barrier
+#pragma omp single
+        {
+            for (int p = 0; p < nt; ++p) piece_first[std::size_t(p) + 1] += piece_first[std::size_t(p)];
+            for (std::int64_t i = 0; i < rows; ++i) out.start[std::size_t(i + 1)] = out.start[std::size_t(i)] + row_count[std::size_t(i)];
+            out.column.resize(std::size_t(out.start.back()));
+            out.block.resize(std::size_t(out.start.back()));
+        }  // implicit barrier
+        std::copy(columns.begin(), columns.end(), out.column.begin() + piece_first[std::size_t(t)]);
+        std::copy(blocks.begin(), blocks.end(), out.block.begin() + piece_first[std::size_t(t)]);
     }
     return out;
 }
@@ -133,14 +139,24 @@ BlockMatrix transpose(const BlockMatrix& a) {
 }
 
 BlockMatrix multiply(const BlockMatrix& a, const BlockMatrix& b) {
-    return build_by_rows(a.rows, b.cols, [&](std::int64_t i, auto&& block) {
-        for (std::int64_t p = a.start[std::size_t(i)]; p < a.start[std::size_t(i + 1)]; ++p) {
-            const Eigen::Matrix3d& left = a.block[std::size_t(p)];
-            const std::int64_t k = a.column[std::size_t(p)];
-            for (std::int64_t q = b.start[std::size_t(k)]; q < b.start[std::size_t(k + 1)]; ++q)
-                block(b.column[std::size_t(q)]).noalias() += left * b.block[std::size_t(q)];
-        }
-    });
+    return build_by_rows(
+        a.rows, b.cols,
+        [&](std::int64_t i, auto&& block) {
+            for (std::int64_t p = a.start[std::size_t(i)]; p < a.start[std::size_t(i + 1)]; ++p) {
+                const Eigen::Matrix3d& left = a.block[std::size_t(p)];
+                const std::int64_t k = a.column[std::size_t(p)];
+                for (std::int64_t q = b.start[std::size_t(k)]; q < b.start[std::size_t(k + 1)]; ++q)
+                    block(b.column[std::size_t(q)]).noalias() += left * b.block[std::size_t(q)];
+            }
+        },
+        [&](std::int64_t i) {
+            std::int64_t bound = 0;
+            for (std::int64_t p = a.start[std::size_t(i)]; p < a.start[std::size_t(i + 1)]; ++p) {
+                const std::int64_t k = a.column[std::size_t(p)];
+                bound += b.start[std::size_t(k + 1)] - b.start[std::size_t(k)];
+            }
+            return bound;
+        });
 }
 
 namespace {
@@ -151,18 +167,21 @@ template <class VisitRow>
 BlockMatrix build_prolongator(std::int64_t n, const std::vector<Eigen::Matrix3d>& inverse_diagonal, const StrengthGraph& strong,
                               const std::vector<std::int32_t>& aggregate, const std::vector<double>& weight,
                               std::int64_t aggregate_count, double omega, VisitRow visit_row) {
-    BlockMatrix p = build_by_rows(n, aggregate_count, [&](std::int64_t i, auto&& block) {
-        const std::int32_t own = aggregate[std::size_t(i)];
-        block(own);  // the aggregate of i is always present
-        const auto first = strong.neighbour.begin() + strong.start[std::size_t(i)];
-        const auto last = strong.neighbour.begin() + strong.start[std::size_t(i + 1)];
-        visit_row(i, [&](std::int64_t j, const auto& a_ij) {
-            if (j == i || std::find(first, last, std::int32_t(j)) != last)
-                block(aggregate[std::size_t(j)]) += weight[std::size_t(j)] * a_ij;
-            else  // weak: lumped into the diagonal block of A_F
-                block(own) += weight[std::size_t(i)] * a_ij;
-        });
-    });
+    BlockMatrix p = build_by_rows(
+        n, aggregate_count,
+        [&](std::int64_t i, auto&& block) {
+            const std::int32_t own = aggregate[std::size_t(i)];
+            block(own);  // the aggregate of i is always present
+            const auto first = strong.neighbour.begin() + strong.start[std::size_t(i)];
+            const auto last = strong.neighbour.begin() + strong.start[std::size_t(i + 1)];
+            visit_row(i, [&](std::int64_t j, const auto& a_ij) {
+                if (j == i || std::find(first, last, std::int32_t(j)) != last)
+                    block(aggregate[std::size_t(j)]) += weight[std::size_t(j)] * a_ij;
+                else  // weak: lumped into the diagonal block of A_F
+                    block(own) += weight[std::size_t(i)] * a_ij;
+            });
+        },
+        [&](std::int64_t i) { return 1 + strong.start[std::size_t(i + 1)] - strong.start[std::size_t(i)]; });
 #pragma omp parallel for schedule(static) if (n >= kParallelMinRows)
     for (std::int64_t i = 0; i < n; ++i)
         for (std::int64_t q = p.start[std::size_t(i)]; q < p.start[std::size_t(i + 1)]; ++q) {
@@ -186,18 +205,21 @@ BlockMatrix smoothed_prolongator(const BlockMatrix& a, const std::vector<Eigen::
 }
 
 BlockMatrix filtered_blocks(const ScalarRows& a, const StrengthGraph& strong) {
-    return build_by_rows(a.rows() / 3, a.rows() / 3, [&](std::int64_t i, auto&& block) {
-        const auto first = strong.neighbour.begin() + strong.start[std::size_t(i)];
-        const auto last = strong.neighbour.begin() + strong.start[std::size_t(i + 1)];
-        Eigen::Vector3d lumped = Eigen::Vector3d::Zero();
-        for (int r = 0; r < 3; ++r)
-            for_each_scalar_entry(a, 3 * i + r, [&](int col, double v) {
-                const std::int32_t j = col / 3;
-                if (j == i || std::find(first, last, j) != last) block(j)(r, col % 3) += v;
-                else lumped[r] += std::abs(v);
-            });
-        block(std::int32_t(i)).diagonal() += lumped;  // (references into the row die as it grows)
-    });
+    return build_by_rows(
+        a.rows() / 3, a.rows() / 3,
+        [&](std::int64_t i, auto&& block) {
+            const auto first = strong.neighbour.begin() + strong.start[std::size_t(i)];
+            const auto last = strong.neighbour.begin() + strong.start[std::size_t(i + 1)];
+            Eigen::Vector3d lumped = Eigen::Vector3d::Zero();
+            for (int r = 0; r < 3; ++r)
+                for_each_scalar_entry(a, 3 * i + r, [&](int col, double v) {
+                    const std::int32_t j = col / 3;
+                    if (j == i || std::find(first, last, j) != last) block(j)(r, col % 3) += v;
+                    else lumped[r] += std::abs(v);
+                });
+            block(std::int32_t(i)).diagonal() += lumped;
+        },
+        [&](std::int64_t i) { return 1 + strong.start[std::size_t(i + 1)] - strong.start[std::size_t(i)]; });
 }
 
 std::vector<Eigen::Matrix3d> diagonal_blocks(const ScalarRows& a) {

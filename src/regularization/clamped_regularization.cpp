@@ -18,17 +18,6 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
-/// α · min_i α_i w0_i: the data term alone bounds the smallest eigenvalue of R (eq. 25).
-double smallest_eigenvalue_bound(const RegularizationWeights& w, std::int64_t vertex_count) {
-    double smallest = std::numeric_limits<double>::infinity();
-    for (std::int64_t i = 0; i < vertex_count; ++i) {
-        const double w0 = w.vertex_weights.size() ? w.vertex_weights[i] : 1.0;
-        const double alpha_i = w.vertex_alpha.size() ? w.vertex_alpha[i] : 1.0;
-        smallest = std::min(smallest, alpha_i * w0);
-    }
-    return std::isfinite(smallest) ? w.alpha * smallest : w.alpha;
-}
-
 /// How far the unconstrained solution leaves the boxes (vertex count, max excess in spacings).
 void measure_box_excess(const DigitalSurface& surface, const PointMatrix& positions, double half_width, ClampReport& report) {
     const Eigen::Vector3d spacing = surface.grid.spacing;

@@ -26,7 +26,8 @@ CgResult preconditioned_conjugate_gradient(const ScalarRows& R, const Eigen::Vec
                                            const Preconditioner& preconditioner, const CgStop& stop) {
     const double norm_b = b.norm(), norm_R = infinity_norm(R);
     const auto target = [&](const Eigen::VectorXd& at) {
-        return std::max(stop.relative_residual * norm_b, stop.backward_error * (norm_R * at.norm() + norm_b));
+        const double wanted = stop.absolute_residual > 0 ? stop.absolute_residual : stop.relative_residual * norm_b;
+        return std::max(wanted, stop.backward_error * (norm_R * at.norm() + norm_b));
     };
     const int max_restarts = 8;
     Eigen::VectorXd r(b.size()), z(b.size()), p, q(b.size());

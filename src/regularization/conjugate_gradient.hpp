@@ -14,6 +14,7 @@ using Preconditioner = std::function<void(const Eigen::VectorXd& r, Eigen::Vecto
 
 struct CgStop {
     double relative_residual = 1e-10;  ///< stop once ‖b − R x‖ ≤ this · ‖b‖ ...
+    double absolute_residual = 0;      ///< ... or, if > 0 (replacing the line above), ‖b − R x‖ ≤ this ...
     /// ... or once the residual is at rounding level, ‖b − R x‖ ≤ this · (‖R‖∞ ‖x‖ + ‖b‖): no
     /// smaller residual can be computed in double precision (a normwise backward error; CHOLMOD's
     /// answers have about 1e-16). This is what ends the iteration when α is tiny.

@@ -3,6 +3,7 @@
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -205,8 +206,9 @@ private:
     bool fairness_ = false;
 };
 
-Eigen::SparseMatrix<double> assemble_matrix(const FaceMatrix& quads, const VertexLinks& links, const PointMatrix& normals,
-                                            const RegularizationWeights& w, std::int64_t n) {
+/// Writes R into `R` (Eigen 3.4's SparseMatrix has no move assignment: returning it would copy).
+void assemble_matrix(const FaceMatrix& quads, const VertexLinks& links, const PointMatrix& normals,
+                     const RegularizationWeights& w, std::int64_t n, Eigen::SparseMatrix<double>& R) {
     const BlockAssembler assembler(quads, links, normals, w, n);
     const bool parallel = n >= 4096;
     // Pass 1: entries per scalar row (the three rows of a vertex have the same count).
@@ -226,7 +228,7 @@ Eigen::SparseMatrix<double> assemble_matrix(const FaceMatrix& quads, const Verte
         throw Error("regularization system too large: " + std::to_string(row_start.back()) + " non-zeros (limit 2^31)");
 
     // Pass 2: values, written in place (symmetric: the row-major layout is the column-major one).
-    Eigen::SparseMatrix<double> R(3 * n, 3 * n);
+    R.resize(3 * n, 3 * n);
     R.resizeNonZeros(Eigen::Index(row_start.back()));
     int* outer = R.outerIndexPtr();
     int* inner = R.innerIndexPtr();
@@ -256,7 +258,6 @@ Eigen::SparseMatrix<double> assemble_matrix(const FaceMatrix& quads, const Verte
             }
         }
     }
-    return R;
 }
 
 }  // namespace
@@ -282,7 +283,7 @@ RegularizationSystem assemble_regularization_system(const PointMatrix& positions
     if (normals.rows() != quads.rows()) throw Error("normal field has " + std::to_string(normals.rows()) +
                                                     " vectors for " + std::to_string(quads.rows()) + " faces");
     RegularizationSystem system;
-    system.matrix = assemble_matrix(quads, links, normals, weights, n);
+    assemble_matrix(quads, links, normals, weights, n, system.matrix);
     system.rhs.resize(3 * n);
     double constant = 0;
 #pragma omp parallel for schedule(static) reduction(+ : constant) if (n >= 4096)
@@ -293,6 +294,12 @@ RegularizationSystem assemble_regularization_system(const PointMatrix& positions
     }
     system.constant = constant;
     return system;
+}
+
+double smallest_eigenvalue_bound(const RegularizationWeights& w, std::int64_t vertex_count) {
+    double smallest = std::numeric_limits<double>::infinity();
+    for (std::int64_t i = 0; i < vertex_count; ++i) smallest = std::min(smallest, data_weight(w, i));
+    return std::isfinite(smallest) ? w.alpha * smallest : w.alpha;
 }
 
 EnergyTerms regularization_energy(const PointMatrix& candidate, const PointMatrix& positions, const FaceMatrix& quads,

@@ -16,7 +16,11 @@ RegularizationResult regularize(const DigitalSurface& surface, const PointMatrix
     result.assembly_seconds = seconds_since(started);
     Eigen::VectorXd x = flatten_points(surface.vertices);  // warm start at p
     started = Clock::now();
-    result.solve = solve_spd(system.matrix, system.rhs, x, solver);
+    SolverOptions options = solver;
+    if (!(options.smallest_eigenvalue > 0)) options.smallest_eigenvalue = smallest_eigenvalue_bound(weights, surface.vertex_count());
+    if (options.max_error == 0 && options.max_error_voxels > 0)
+        options.max_error = options.max_error_voxels * surface.grid.spacing.minCoeff();
+    result.solve = solve_spd(system.matrix, system.rhs, x, options);
     result.solve_seconds = seconds_since(started);
     result.positions = unflatten_points(x);
     result.energy_before = regularization_energy(surface.vertices, surface.vertices, surface.quads, links, normals, weights);

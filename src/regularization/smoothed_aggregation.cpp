@@ -2,6 +2,9 @@
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/Dense>
+#include <omp.h>
+
+#include <algorithm>
 #include <cmath>
 
 #include "dsreg/error.hpp"
@@ -72,24 +75,111 @@ double largest_eigenvalue_bound(const BlockMatrix& a, const std::vector<Eigen::M
     return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(t, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff() + beta.back();
 }
 
-/// Strong couplings ‖A_ij‖_F ≥ θ √(‖A_ii‖_F ‖A_jj‖_F) of the node graph (symmetric for symmetric A).
+/// Strong couplings ‖A_ij‖_F ≥ θ √(‖A_ii‖_F ‖A_jj‖_F) of the node graph, made symmetric (j is a
+/// strong neighbour of i iff i is one of j). The test alone is symmetric only up to rounding (the
+/// two block norms are summed in different orders, and the Galerkin products are symmetric only to
+/// rounding): one pair on the threshold would make the filtered fine operator, and with it the
+/// preconditioner, unsymmetric, and CG could break down. Rows in parallel.
 template <class Operator>
 StrengthGraph strong_couplings(const Operator& a, std::int64_t n, const std::vector<Eigen::Matrix3d>& diagonal, double theta) {
     std::vector<double> diagonal_norm(static_cast<std::size_t>(n));
     for (std::int64_t i = 0; i < n; ++i) diagonal_norm[std::size_t(i)] = diagonal[std::size_t(i)].norm();
-    StrengthGraph s;
-    s.start.assign(static_cast<std::size_t>(n + 1), 0);
-    std::vector<double> scratch(static_cast<std::size_t>(n), 0.0);
-    BlockRowNorms row;
-    for (std::int64_t i = 0; i < n; ++i) {
-        block_row_norms(a, i, scratch, row);
-        for (std::size_t q = 0; q < row.neighbor.size(); ++q) {
-            const std::int32_t j = row.neighbor[q];
-            if (row.norm[q] >= theta * std::sqrt(diagonal_norm[std::size_t(i)] * diagonal_norm[std::size_t(j)])) s.neighbour.push_back(j);
+    const int threads = n >= kParallelMinRows ? omp_get_max_threads() : 1;
+    std::vector<std::vector<std::int32_t>> piece(static_cast<std::size_t>(threads));
+    std::vector<std::int64_t> count(static_cast<std::size_t>(n) + 1, 0);
+#pragma omp parallel num_threads(threads)
+    {
+        const int t = omp_get_thread_num(), nt = omp_get_num_threads();
+        const std::int64_t first = n * t / nt, last = n * (t + 1) / nt;
+        std::vector<double> scratch(static_cast<std::size_t>(n), 0.0);
+        BlockRowNorms row;
+        auto& out = piece[std::size_t(t)];
+        for (std::int64_t i = first; i < last; ++i) {
+            block_row_norms(a, i, scratch, row);
+            const std::size_t before = out.size();
+            for (std::size_t q = 0; q < row.neighbor.size(); ++q) {
+                const std::int32_t j = row.neighbor[q];
+                if (row.norm[q] >= theta * std::sqrt(diagonal_norm[std::size_t(i)] * diagonal_norm[std::size_t(j)])) out.push_back(j);
+            }
+            count[std::size_t(i) + 1] = std::int64_t(out.size() - before);
         }
+    }
+    // One-sided graph G (rows in order), then S = G ∪ Gᵀ row by row.
+    StrengthGraph one_sided;
+    one_sided.start.assign(std::size_t(n + 1), 0);
+    for (std::int64_t i = 0; i < n; ++i) one_sided.start[std::size_t(i + 1)] = one_sided.start[std::size_t(i)] + count[std::size_t(i) + 1];
+    one_sided.neighbour.reserve(std::size_t(one_sided.start.back()));
+    for (auto& p : piece) {
+        one_sided.neighbour.insert(one_sided.neighbour.end(), p.begin(), p.end());
+        std::vector<std::int32_t>().swap(p);
+    }
+    std::vector<std::int64_t> tstart(std::size_t(n + 1), 0);
+    for (std::int32_t j : one_sided.neighbour) ++tstart[std::size_t(j) + 1];
+    for (std::int64_t i = 0; i < n; ++i) tstart[std::size_t(i + 1)] += tstart[std::size_t(i)];
+    std::vector<std::int32_t> tneighbour(one_sided.neighbour.size());
+    {
+        std::vector<std::int64_t> next(tstart.begin(), tstart.end() - 1);
+        for (std::int64_t i = 0; i < n; ++i)
+            for (std::int64_t q = one_sided.start[std::size_t(i)]; q < one_sided.start[std::size_t(i + 1)]; ++q)
+                tneighbour[std::size_t(next[std::size_t(one_sided.neighbour[std::size_t(q)])]++)] = std::int32_t(i);
+    }
+    StrengthGraph s;
+    s.start.assign(std::size_t(n + 1), 0);
+    s.neighbour.reserve(one_sided.neighbour.size() + 16);
+    std::vector<std::int32_t> merged;
+    for (std::int64_t i = 0; i < n; ++i) {
+        merged.assign(one_sided.neighbour.begin() + one_sided.start[std::size_t(i)], one_sided.neighbour.begin() + one_sided.start[std::size_t(i + 1)]);
+        merged.insert(merged.end(), tneighbour.begin() + tstart[std::size_t(i)], tneighbour.begin() + tstart[std::size_t(i + 1)]);
+        std::sort(merged.begin(), merged.end());
+        merged.erase(std::unique(merged.begin(), merged.end()), merged.end());
+        s.neighbour.insert(s.neighbour.end(), merged.begin(), merged.end());
         s.start[std::size_t(i + 1)] = std::int64_t(s.neighbour.size());
     }
     return s;
+}
+
+/// (A + Aᵀ)/2 in place for a block matrix with a symmetric pattern: the Galerkin product PᵀAP is
+/// symmetric only up to rounding, and the smoother and the V-cycle rely on symmetry.
+void symmetrize(BlockMatrix& a) {
+#pragma omp parallel for schedule(static) if (a.rows >= kParallelMinRows)
+    for (std::int64_t i = 0; i < a.rows; ++i) {
+        // sort each row by column so that the mirror block can be found by bisection
+        const std::int64_t first = a.start[std::size_t(i)], last = a.start[std::size_t(i + 1)];
+        std::vector<std::pair<std::int32_t, Eigen::Matrix3d>> row;
+        row.reserve(std::size_t(last - first));
+        for (std::int64_t q = first; q < last; ++q) row.emplace_back(a.column[std::size_t(q)], a.block[std::size_t(q)]);
+        std::sort(row.begin(), row.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+        for (std::int64_t q = first; q < last; ++q) {
+            a.column[std::size_t(q)] = row[std::size_t(q - first)].first;
+            a.block[std::size_t(q)] = row[std::size_t(q - first)].second;
+        }
+    }
+    const auto find = [&](std::int64_t i, std::int32_t j) -> std::int64_t {
+        const auto first = a.column.begin() + a.start[std::size_t(i)], last = a.column.begin() + a.start[std::size_t(i + 1)];
+        const auto it = std::lower_bound(first, last, j);
+        return it != last && *it == j ? std::int64_t(it - a.column.begin()) : -1;
+    };
+    bool missing = false;
+#pragma omp parallel for schedule(static) reduction(|| : missing) if (a.rows >= kParallelMinRows)
+    for (std::int64_t i = 0; i < a.rows; ++i)
+        for (std::int64_t q = a.start[std::size_t(i)]; q < a.start[std::size_t(i + 1)]; ++q) {
+            const std::int32_t j = a.column[std::size_t(q)];
+            if (j < i) continue;  // each pair once, by its upper block
+            if (j == i) {
+                const Eigen::Matrix3d b = a.block[std::size_t(q)];
+                a.block[std::size_t(q)] = 0.5 * (b + b.transpose());
+                continue;
+            }
+            const std::int64_t mirror = find(j, std::int32_t(i));
+            if (mirror < 0) {
+                missing = true;
+                continue;
+            }
+            const Eigen::Matrix3d average = 0.5 * (a.block[std::size_t(q)] + a.block[std::size_t(mirror)].transpose());
+            a.block[std::size_t(q)] = average;
+            a.block[std::size_t(mirror)] = average.transpose();
+        }
+    if (missing) throw Error("algebraic multigrid: a coarse operator has an unsymmetric pattern");
 }
 
 /// Greedy aggregation (Vaněk et al. 1996): (1) a node whose strong neighbours are all free
@@ -168,6 +258,7 @@ SmoothedAggregation::SmoothedAggregation(const Eigen::SparseMatrix<double>& R, c
         L.restriction = transpose(L.prolongator);
         auto next = std::make_unique<Level>();
         next->op = multiply(L.restriction, multiply(L.op, L.prolongator));  // Galerkin: Pᵀ A P
+        symmetrize(next->op);
         next->nodes = aggregates;
         weight.swap(coarse_weight);
         levels_.push_back(std::move(level));
@@ -212,7 +303,7 @@ void SmoothedAggregation::vcycle(std::size_t index, const Eigen::VectorXd& b, Ei
 /// Chebyshev iteration on D⁻¹A over [λmax/range, λmax] (Saad, Iterative Methods, alg. 12.1): a
 /// fixed polynomial, so the V-cycle stays symmetric with the same pre- and post-smoother.
 void SmoothedAggregation::smooth(const Level& L, const Eigen::VectorXd& b, Eigen::VectorXd& x, bool zero_guess) const {
-    const double upper = L.lambda_max, lower = upper / settings_.smoothing_range;
+    const double upper = settings_.smoothing_safety * L.lambda_max, lower = upper / settings_.smoothing_range;
     const double theta = 0.5 * (upper + lower), delta = 0.5 * (upper - lower), sigma = theta / delta;
     double rho = 1 / sigma;
     if (zero_guess) {

@@ -18,10 +18,10 @@ constexpr Eigen::Index kAutoDirectMaxUnknowns = 10000;  ///< up to this CHOLMOD 
 constexpr double kAutoMinDataWeight = 1e-6;  ///< below this α/diag, amg needs hundreds of iterations
 constexpr int kAutoAmgMaxIterations = 200;   ///< auto falls back to CHOLMOD past this
 
-double relative_residual(const Eigen::SparseMatrix<double>& R, const Eigen::VectorXd& b, const Eigen::VectorXd& x) {
-    const double norm_b = b.norm();
-    const double norm_r = (detail::row_view(R) * x - b).norm();
-    return norm_b > 0 ? norm_r / norm_b : norm_r;
+double residual_norm(const Eigen::SparseMatrix<double>& R, const Eigen::VectorXd& b, const Eigen::VectorXd& x) {
+    Eigen::VectorXd r;
+    detail::multiply_operator(detail::row_view(R), x, r);
+    return (r - b).norm();
 }
 
 std::string format_number(const char* format, double value) {
@@ -46,13 +46,16 @@ SolveReport solve_cholmod(const Eigen::SparseMatrix<double>& R, const Eigen::Vec
 detail::CgStop stop_rule(const SolverOptions& options, int max_iterations) {
     detail::CgStop stop;
     stop.relative_residual = options.tolerance;
+    if (options.max_error > 0 && options.smallest_eigenvalue > 0) stop.absolute_residual = options.max_error * options.smallest_eigenvalue;
     stop.max_iterations = max_iterations;
     return stop;
 }
 
 Error not_converged(const std::string& solver, const SolverOptions& options, int iterations) {
-    return Error(solver + " did not reach the relative residual " + format_number("%.1e", options.tolerance) + " in " +
-                 std::to_string(iterations) + " iterations; use --solver cholmod");
+    const std::string target = options.max_error > 0 && options.smallest_eigenvalue > 0
+                                   ? "the error bound " + format_number("%.1e", options.max_error)
+                                   : "the relative residual " + format_number("%.1e", options.tolerance);
+    return Error(solver + " did not reach " + target + " in " + std::to_string(iterations) + " iterations; use --solver cholmod");
 }
 
 /// CG with the inverse 3×3 diagonal blocks of R as preconditioner (block Jacobi).
@@ -176,7 +179,9 @@ SolveReport solve_spd(const Eigen::SparseMatrix<double>& R, const Eigen::VectorX
             break;
         case SolverKind::Auto: report = solve_auto(R, b, x, options); break;
     }
-    report.relative_residual = relative_residual(R, b, x);
+    const double norm_r = residual_norm(R, b, x), norm_b = b.norm();
+    report.relative_residual = norm_b > 0 ? norm_r / norm_b : norm_r;
+    report.error_bound = options.smallest_eigenvalue > 0 ? norm_r / options.smallest_eigenvalue : -1.0;
     return report;
 }
 
