@@ -4,14 +4,22 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <map>
+#include <random>
 
 #include "dsreg/error.hpp"
 #include "dsreg/implicit_shape.hpp"
 #include "dsreg/normals.hpp"
 #include "dsreg/regularization.hpp"
 #include "dsreg/solvers.hpp"
+#include "dsreg/volume_io.hpp"
+#include "../src/regularization/smoothed_aggregation.hpp"
 #include "test_support.hpp"
+
+#ifndef DSREG_SHARED_DATA_DIR
+#define DSREG_SHARED_DATA_DIR "../shared/data"
+#endif
 
 namespace dsreg {
 namespace {
@@ -46,9 +54,25 @@ Problem ball_with_default_weights() {
     return assemble("ball r=9", test::make_ball(22, 9.0, 10.5), 1.0, 3.0, RegularizationWeights{});
 }
 
+/// Goursat's surface (genus 0, saddles, 9.4K surfels) at h = 0.5 with the paper's weights.
+Problem goursat_with_default_weights() {
+    return assemble("goursat h=0.5", digitize(make_shape("goursat"), 0.5), 0.5, 3 * std::cbrt(0.5), RegularizationWeights{});
+}
+
+/// ../shared/data/bunny-64.vol (where "amg: not positive definite" was once reported), II r = 3.
+std::vector<Problem> bunny_64() {
+    const std::string path = std::string(DSREG_SHARED_DATA_DIR) + "/bunny-64.vol";
+    if (!std::filesystem::exists(path)) return {};
+    return {assemble("bunny-64", read_volume(path), 1.0, 3.0, RegularizationWeights{})};
+}
+
 const std::vector<Problem>& problems() {
-    static const std::vector<Problem> all = {ball_with_default_weights(), sphere_with_tiny_alpha(1.0 / 6),
-                                             sphere_with_tiny_alpha(1.0 / 8)};
+    static const std::vector<Problem> all = [] {
+        std::vector<Problem> p = {ball_with_default_weights(), sphere_with_tiny_alpha(1.0 / 6), sphere_with_tiny_alpha(1.0 / 8),
+                                  goursat_with_default_weights()};
+        for (Problem& b : bunny_64()) p.push_back(std::move(b));
+        return p;
+    }();
     return all;
 }
 
@@ -151,6 +175,48 @@ TEST(Solvers, IterativeSolversThrowWhenTheyCannotConverge) {
     options.max_iterations = 2;
     Eigen::VectorXd x = p.initial;
     EXPECT_THROW(solve_spd(p.system.matrix, p.system.rhs, x, options), Error);
+}
+
+TEST(Solvers, ErrorBoundStopIsWithinItsBoundOfCholmod) {
+    // max_error with the smallest eigenvalue α·min w0: CG stops on ‖Rx − b‖/λ ≤ max_error, a bound
+    // on ‖x − x*‖₂; the distance to CHOLMOD's answer must be within it (paper weights only: with
+    // tiny α the rounding floor stops CG first).
+    for (std::size_t i : {std::size_t(0), std::size_t(3)}) {
+        const Problem& p = problems()[i];
+        for (SolverKind kind : {SolverKind::Amg, SolverKind::ConjugateGradient}) {
+            SolverOptions options;
+            options.kind = kind;
+            options.smallest_eigenvalue = 1e-3;
+            options.max_error = kDefaultMaxErrorVoxels * p.spacing;
+            Eigen::VectorXd x = p.initial;
+            const SolveReport r = solve_spd(p.system.matrix, p.system.rhs, x, options);
+            EXPECT_GT(r.error_bound, 0) << p.name;
+            EXPECT_LE(r.error_bound, options.max_error) << p.name;
+            EXPECT_LE(max_vertex_distance_voxels(x, solution(i, SolverKind::Cholmod).x, p.spacing) * p.spacing,
+                      r.error_bound + 1e-12 * p.spacing)
+                << p.name << ", " << solver_name(kind);
+        }
+    }
+}
+
+TEST(Solvers, AmgPreconditionerIsSymmetricPositiveDefinite) {
+    // CG needs an SPD preconditioner: one V-cycle must be a symmetric positive definite operator
+    // (to rounding), on every problem, tiny α included.
+    std::mt19937 rng(7);
+    std::normal_distribution<double> normal;
+    for (const Problem& p : problems()) {
+        const detail::SmoothedAggregation amg(p.system.matrix, detail::AmgSettings{});
+        const Eigen::Index n = p.system.matrix.rows();
+        for (int trial = 0; trial < 3; ++trial) {
+            const Eigen::VectorXd x = Eigen::VectorXd::NullaryExpr(n, [&] { return normal(rng); });
+            const Eigen::VectorXd y = Eigen::VectorXd::NullaryExpr(n, [&] { return normal(rng); });
+            Eigen::VectorXd mx, my;
+            amg.apply(x, mx);
+            amg.apply(y, my);
+            EXPECT_NEAR(y.dot(mx), x.dot(my), 1e-9 * std::sqrt(x.dot(mx) * y.dot(my))) << p.name;
+            EXPECT_GT(x.dot(mx), 0) << p.name;
+        }
+    }
 }
 
 TEST(Solvers, IndefiniteMatricesAreRejected) {

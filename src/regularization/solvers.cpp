@@ -128,13 +128,19 @@ SolveReport solve_auto(const Eigen::SparseMatrix<double>& R, const Eigen::Vector
     const Eigen::VectorXd guess = x;
     SolveReport report;
     const int cap = std::min(options.max_iterations, kAutoAmgMaxIterations);
-    if (solve_amg(R, b, x, options, cap, report)) {
-        report.note = "auto: large system";
-        return report;
+    std::string why;
+    try {
+        if (solve_amg(R, b, x, options, cap, report)) {
+            report.note = "auto: large system";
+            return report;
+        }
+        why = "amg did not converge in " + std::to_string(cap) + " iterations";
+    } catch (const Error& e) {  // e.g. a CG breakdown: the direct solver decides whether R is SPD
+        why = std::string("amg failed (") + e.what() + ")";
     }
     x = guess;
     report = solve_cholmod(R, b, x);
-    report.note = "auto: amg did not converge in " + std::to_string(cap) + " iterations";
+    report.note = "auto: " + why;
     return report;
 }
 
