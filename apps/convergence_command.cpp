@@ -237,7 +237,8 @@ void add_convergence_command(CLI::App& app) {
                     "Input field u: exact (true normals of the solid, box walls included) or ii (integral invariants)")
         ->check(CLI::IsMember({"exact", "ii"}))
         ->capture_default_str();
-    cmd->add_option("--radius-k", options->radius_k, "II radius r = K·h^(1/3) (physical units)")->capture_default_str();
+    cmd->add_option("--radius-k", options->radius_k, "II radius r = K·h^(1/3) (physical units; 3 suits shapes about 10 across such as goursat, 1 the unit "
+                    "sphere and the plane in [-1,1]^3, as in docs/convergence.md)")->capture_default_str();
     cmd->add_option("--alpha-k", options->alpha_k, "Data attachment alpha = A·h²")->capture_default_str();
     cmd->add_option("--beta", options->beta, "Weight of normal alignment")->capture_default_str();
     cmd->add_option("--gamma", options->gamma, "Weight of fairness")->capture_default_str();
