@@ -172,7 +172,11 @@ MeshEvaluation evaluate_mesh(const PolygonMesh& mesh, const ImplicitShape& shape
 
 enum class InputNormalField {
     Exact,              ///< solid_exact_normals
-    IntegralInvariant,  ///< integral_invariant_normals with r = radius_k · h^(1/3)
+    /// integral_invariant_normals (default biweight kernel) with r = radius_k · h^(1/3). For a
+    /// shape clipped by its box (the tilted plane), the field is computed on a digitization in
+    /// a box enlarged by r + 2h, so that no ball sees the box walls, and the faces on the walls
+    /// get the wall's normal (docs/convergence.md).
+    IntegralInvariant,
 };
 
 struct ConvergenceOptions {
