@@ -111,5 +111,49 @@ echo "precious" >"$work/keep.obj"
 "$DSREG" regularize "$work/short.vol" -o "$work/keep.obj" 2>/dev/null
 check "existing output kept on failure" grep -q precious "$work/keep.obj"
 
+# Degenerate but valid volumes run through; hostile ones get a clear message and no output.
+vol2() {  # vol2 FILE X Y Z PAYLOAD-BYTES (printf escapes): a .vol version 2
+    printf 'X: %s\nY: %s\nZ: %s\nVoxel-Size: 1\nVersion: 2\n.\n' "$2" "$3" "$4" >"$1"
+    printf "$5" >>"$1"
+}
+vol2 "$work/one.vol" 1 1 1 '\001'
+"$DSREG" regularize "$work/one.vol" -o "$work/one.obj" --report "$work/one.json" -q
+check "one voxel in a one-voxel domain" test "$(grep -c '^f ' "$work/one.obj")" -eq 6
+vol2 "$work/full.vol" 3 3 3 "$(printf '\\001%.0s' {1..27})"
+"$DSREG" regularize "$work/full.vol" --normals ii -o "$work/full.obj" -q
+check "full domain" test "$(grep -c '^f ' "$work/full.obj")" -eq 54
+vol2 "$work/sheet.vol" 5 5 3 "$(printf '\\000%.0s' {1..25})$(printf '\\001%.0s' {1..25})$(printf '\\000%.0s' {1..25})"
+"$DSREG" regularize "$work/sheet.vol" -o "$work/sheet.obj" -q
+check "one-voxel-thick sheet" test "$(grep -c '^f ' "$work/sheet.obj")" -eq 70
+vol2 "$work/dots.vol" 3 1 3 '\001\000\001\000\000\000\001\000\001'
+"$DSREG" regularize "$work/dots.vol" -o "$work/dots.obj" --report "$work/dots.json" -q
+check "many components" grep -q '"components": 4' "$work/dots.json"
+expect_error "negative alpha" "alpha" regularize "$work/one.vol" --alpha -1 -o "$work/out.obj"
+expect_error "negative beta" "beta" regularize "$work/one.vol" --beta -0.5 -o "$work/out.obj"
+expect_error "NaN gamma" "gamma" regularize "$work/one.vol" --gamma nan -o "$work/out.obj"
+expect_error "zero h" "--h" regularize --shape sphere1 --h 0 -o "$work/out.obj"
+printf 'X: 4\nY: 2\nZ: 2\nVersion: 3\n.\n' >"$work/bomb.vol"
+# zlib stream = 2-byte zlib header + the raw deflate data of gzip -n (after its 10-byte header).
+{ printf '\170\332'; head -c 16000000 /dev/zero | gzip -9 -n | tail -c +11; } >>"$work/bomb.vol"
+expect_error "zlib bomb" "inflates to more than 16 bytes" regularize "$work/bomb.vol" -o "$work/out.obj"
+printf 'X: 2147483648\nY: 2147483648\nZ: 2147483648\nVersion: 2\n.\n' >"$work/huge.vol"
+expect_error "dimensions of 2^31" "exceed the limit" regularize "$work/huge.vol" -o "$work/out.obj"
+
+# Limits: --max-voxels and --max-memory refuse a run before allocating for it.
+expect_error "max-voxels" "exceed the limit of 26 voxels" regularize "$work/full.vol" --max-voxels 26 -o "$work/out.obj"
+expect_error "max-voxels not positive" "--max-voxels must be positive" regularize "$work/full.vol" --max-voxels 0 \
+    -o "$work/out.obj"
+printf 'X: 300\nY: 300\nZ: 300\nVersion: 2\n.\n' >"$work/big.vol"
+expect_error "max-memory before reading" "--max-memory 20M leaves room for" regularize "$work/big.vol" --max-memory 20M \
+    -o "$work/out.obj"
+expect_error "max-memory for a shape" "--max-memory 20M" regularize --shape sphere1 --h 0.005 --max-memory 20M \
+    -o "$work/out.obj"
+expect_error "max-memory estimate" "exceeds --max-memory 40M" regularize --shape goursat --h 0.25 --max-memory 40M \
+    -o "$work/out.obj"
+expect_error "max-memory not a size" "--max-memory: 'lots'" regularize "$work/one.vol" --max-memory lots -o "$work/out.obj"
+expect_error "max-memory below the minimum" "is below" regularize "$work/one.vol" --max-memory 1K -o "$work/out.obj"
+"$DSREG" regularize "$work/one.vol" --max-memory 1G -o "$work/mem.obj" -q
+check "max-memory large enough" test -s "$work/mem.obj"
+
 echo "$passes passed, $failures failed"
 [[ $failures -eq 0 ]]
