@@ -139,6 +139,10 @@ check "plane convergence" test "$(wc -l <"$work/conv-plane/convergence.csv")" -e
 "$DSREG" convergence --shape sphere1 --h 0.2:0.15:2 --normals ii --radius-k 2 --alpha-k 1e-4 --gamma 0.001 \
     --out "$work/conv-ii" -q >/dev/null
 check "ii convergence" grep -q "^0.2," "$work/conv-ii/convergence.csv"
+"$DSREG" convergence --shape sphere1 --h 0.2:0.15:2 --normals ii --radius-k 2 --alpha-k 1e-4 --gamma 0.001 \
+    --ii-kernel ball --out "$work/conv-ball" -q >/dev/null
+check "ii kernel ball runs" grep -q "^0.2," "$work/conv-ball/convergence.csv"
+check "ii kernel changes the input field" test "$(sed -n 2p "$work/conv-ii/convergence.csv")" != "$(sed -n 2p "$work/conv-ball/convergence.csv")"
 
 # --- errors: message names the culprit, non-zero exit, nothing written -------------------------
 expect_error "missing mesh" "nothing.obj" eval "$work/nothing.obj" --shape sphere1
@@ -152,6 +156,7 @@ expect_error "range not numbers" "not a number" convergence --shape sphere1 --h 
 expect_error "range COUNT 1" "COUNT" convergence --shape sphere1 --h 0.2:0.1:1 --out "$work/out"
 expect_error "convergence unknown shape" "blob" convergence --shape blob --h 0.2:0.1:2 --out "$work/out"
 expect_error "radius k zero" "radius-k" convergence --shape sphere1 --h 0.2:0.1:2 --normals ii --radius-k 0 --out "$work/out"
+expect_error "unknown ii kernel" "ii-kernel" convergence --shape sphere1 --h 0.2:0.1:2 --normals ii --ii-kernel gauss --out "$work/out"
 expect_error "alpha k zero" "alpha" convergence --shape sphere1 --h 0.2:0.1:2 --alpha-k 0 --out "$work/out"
 expect_error "failure during the run" "region" convergence --shape plane --h 0.2:0.1:2 --wall-margin 5 --out "$work/out"
 touch "$work/file"

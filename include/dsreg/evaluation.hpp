@@ -25,6 +25,7 @@
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/implicit_shape.hpp"
 #include "dsreg/mesh.hpp"
+#include "dsreg/normals.hpp"
 #include "dsreg/solvers.hpp"
 #include "dsreg/volume.hpp"
 
@@ -172,7 +173,7 @@ MeshEvaluation evaluate_mesh(const PolygonMesh& mesh, const ImplicitShape& shape
 
 enum class InputNormalField {
     Exact,              ///< solid_exact_normals
-    /// integral_invariant_normals (default biweight kernel) with r = radius_k · h^(1/3). For a
+    /// integral_invariant_normals (kernel ii_kernel) with r = radius_k · h^(1/3). For a
     /// shape clipped by its box (the tilted plane), the field is computed on a digitization in
     /// a box enlarged by r + 2h, so that no ball sees the box walls, and the faces on the walls
     /// get the wall's normal (docs/convergence.md).
@@ -182,6 +183,7 @@ enum class InputNormalField {
 struct ConvergenceOptions {
     InputNormalField normals = InputNormalField::Exact;
     double radius_k = 3.0;  ///< II radius r = radius_k · h^(1/3), physical units
+    IntegralInvariantKernel ii_kernel = IntegralInvariantKernel::biweight;  ///< ball: the paper's II
     double alpha_k = 1e-5;  ///< α = alpha_k · h² (Fig. 7: 1e-5)
     double beta = 1.0;
     double gamma = 0.0;
