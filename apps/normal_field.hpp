@@ -19,6 +19,7 @@ struct NormalFieldOptions {
     std::string at_input = "ii";  ///< --at-input: the field g that AT regularizes
     std::optional<double> radius;
     std::string ii_kernel = "biweight";  ///< --ii-kernel: ball or biweight
+    bool ii_extrapolate = false;         ///< --ii-extrapolate: 2·n(r/√2) − n(r)
     std::string file;             ///< --normals-file: g (with --normals at) or the field itself
     AmbrosioTortorelliParameters at;
     std::string at_epsilon = "2:0.25";  ///< --at-eps ε1:ε2 (or a single ε)
@@ -43,6 +44,7 @@ struct NormalField {
     std::string input;                            ///< ii, trivial, ctrivial, exact or file (g for AT)
     std::optional<double> radius;                 ///< radius used, if any
     std::optional<std::string> ii_kernel;         ///< kernel of the integral invariants, if used
+    bool ii_extrapolated = false;                 ///< Richardson-extrapolated integral invariants
     std::optional<AmbrosioTortorelliResult> at;  ///< set for --normals at
 };
 

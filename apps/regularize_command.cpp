@@ -97,6 +97,7 @@ nlohmann::json make_report(const RegularizeOptions& o, const LoadedVolume& loade
                             {"normals_input", field.input},
                             {"radius", field.radius ? nlohmann::json(*field.radius) : nlohmann::json(nullptr)},
                             {"ii_kernel", field.ii_kernel ? nlohmann::json(*field.ii_kernel) : nlohmann::json(nullptr)},
+                            {"ii_extrapolated", field.ii_extrapolated},
                             {"solver", result.solve.solver}, {"triangulate", o.triangulate}};
     if (field.at) report["at"] = at_report(o.normals, field, surface);
     report["solve"] = {{"relative_residual", result.solve.relative_residual},

@@ -84,6 +84,11 @@ check "round trip of normals gives the same mesh" cmp -s "$work/at.obj" "$work/a
 check "at of a file field" test -s "$work/at2.obj"
 "$DSREG" regularize --shape sphere9 --h 1 --normals ctrivial --radius 2.5 -o "$work/ct.obj" -q
 check "convolved trivial normals" test -s "$work/ct.obj"
+"$DSREG" regularize --shape sphere9 --h 1 --ii-kernel ball --ii-extrapolate -o "$work/ext.obj" --report "$work/ext.json" -q
+check "extrapolated ball integral invariants" grep -q '"ii_extrapolated": true' "$work/ext.json"
+check "report names the kernel" grep -q '"ii_kernel": "ball"' "$work/ext.json"
+check "default radius doubles with --ii-extrapolate" grep -q '"radius": 6.0,' "$work/ext.json"
+expect_error "unknown ii kernel" "ii-kernel" regularize --shape sphere1 --h 0.25 --ii-kernel gauss -o "$work/out.obj"
 
 # Broken normals files and inconsistent options are rejected before any output is written.
 grep -v '^#' "$work/at.normals" | tail -n +2 >"$work/missing.normals"

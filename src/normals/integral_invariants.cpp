@@ -223,4 +223,25 @@ PointMatrix integral_invariant_normals(const BinaryVolume& volume, const Digital
     return u;
 }
 
+PointMatrix extrapolated_integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface,
+                                                    double radius, IntegralInvariantKernel kernel) {
+    // n(r) = n0 + b·r² + O(r⁴) (b: the curvature variation across the ball), so with
+    // r' = r/√2, 2·n(r') − n(r) = n0 + O(r⁴): Richardson extrapolation to r = 0.
+    const PointMatrix wide = integral_invariant_normals(volume, surface, radius, kernel);
+    const PointMatrix narrow = integral_invariant_normals(volume, surface, radius / std::sqrt(2.0), kernel);
+    const double agreement = std::cos(30.0 * M_PI / 180.0);
+    PointMatrix u(surface.face_count(), 3);
+#pragma omp parallel for schedule(static)
+    for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+        // Where the two scales disagree (a sharp edge, a thin part) the expansion does not hold:
+        // keep the narrow estimate.
+        if (wide.row(f).dot(narrow.row(f)) < agreement) {
+            u.row(f) = narrow.row(f);
+            continue;
+        }
+        u.row(f) = (2.0 * narrow.row(f) - wide.row(f)).normalized();
+    }
+    return u;
+}
+
 }  // namespace dsreg
