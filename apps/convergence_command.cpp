@@ -24,6 +24,7 @@ struct ConvergenceCommandOptions {
     std::string normals = "exact";
     double radius_k = 3.0;
     std::string ii_kernel = "biweight";
+    bool ii_extrapolate = false;
     double alpha_k = 1e-5;
     double beta = 1.0;
     double gamma = 0.0;
@@ -136,7 +137,7 @@ std::string short_shape_name(const ConvergenceCommandOptions& o, const ImplicitS
 
 std::string describe_run(const ConvergenceCommandOptions& o, const ImplicitShape& shape, const std::vector<double>& steps) {
     std::ostringstream s;
-    s << short_shape_name(o, shape) << ", " << (o.normals == "ii" ? "II normals (" + o.ii_kernel + ") r = " + format("%g", o.radius_k) + "·h^(1/3)" : "exact normals")
+    s << short_shape_name(o, shape) << ", " << (o.normals == "ii" ? "II normals (" + o.ii_kernel + (o.ii_extrapolate ? ", extrapolated" : "") + ") r = " + format("%g", o.radius_k) + "·h^(1/3)" : "exact normals")
       << ", alpha = " << format("%g", o.alpha_k) << "·h², beta = " << format("%g", o.beta) << ", gamma = "
       << format("%g", o.gamma) << "; " << steps.size() << " steps h = " << format("%g", steps.front()) << " → "
       << format("%g", steps.back());
@@ -191,6 +192,7 @@ void run(const ConvergenceCommandOptions& o) {
     options.normals = o.normals == "ii" ? InputNormalField::IntegralInvariant : InputNormalField::Exact;
     options.radius_k = o.radius_k;
     options.ii_kernel = parse_integral_invariant_kernel(o.ii_kernel);
+    options.ii_extrapolate = o.ii_extrapolate;
     options.alpha_k = o.alpha_k;
     options.beta = o.beta;
     options.gamma = o.gamma;
@@ -245,6 +247,8 @@ void add_convergence_command(CLI::App& app) {
                     "Weights of the II ball: biweight (1 - d^2/r^2)^2 or ball (uniform, the paper's)")
         ->check(CLI::IsMember({"ball", "biweight"}))
         ->capture_default_str();
+    cmd->add_flag("--ii-extrapolate", options->ii_extrapolate,
+                  "II at r and r/sqrt(2) combined as 2 n(r/sqrt(2)) - n(r) (removes the r^2 bias)");
     cmd->add_option("--alpha-k", options->alpha_k, "Data attachment alpha = A·h²")->capture_default_str();
     cmd->add_option("--beta", options->beta, "Weight of normal alignment")->capture_default_str();
     cmd->add_option("--gamma", options->gamma, "Weight of fairness")->capture_default_str();

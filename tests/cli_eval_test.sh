@@ -143,6 +143,10 @@ check "ii convergence" grep -q "^0.2," "$work/conv-ii/convergence.csv"
     --ii-kernel ball --out "$work/conv-ball" -q >/dev/null
 check "ii kernel ball runs" grep -q "^0.2," "$work/conv-ball/convergence.csv"
 check "ii kernel changes the input field" test "$(sed -n 2p "$work/conv-ii/convergence.csv")" != "$(sed -n 2p "$work/conv-ball/convergence.csv")"
+"$DSREG" convergence --shape sphere1 --h 0.2:0.15:2 --normals ii --radius-k 2 --alpha-k 1e-4 --gamma 0.001 \
+    --ii-extrapolate --out "$work/conv-ext" -q >/dev/null
+check "ii extrapolated runs" grep -q "^0.2," "$work/conv-ext/convergence.csv"
+check "extrapolation changes the input field" test "$(sed -n 2p "$work/conv-ii/convergence.csv")" != "$(sed -n 2p "$work/conv-ext/convergence.csv")"
 
 # --- errors: message names the culprit, non-zero exit, nothing written -------------------------
 expect_error "missing mesh" "nothing.obj" eval "$work/nothing.obj" --shape sphere1

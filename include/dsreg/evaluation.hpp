@@ -184,6 +184,7 @@ struct ConvergenceOptions {
     InputNormalField normals = InputNormalField::Exact;
     double radius_k = 3.0;  ///< II radius r = radius_k · h^(1/3), physical units
     IntegralInvariantKernel ii_kernel = IntegralInvariantKernel::biweight;  ///< ball: the paper's II
+    bool ii_extrapolate = false;  ///< extrapolated_integral_invariant_normals instead
     double alpha_k = 1e-5;  ///< α = alpha_k · h² (Fig. 7: 1e-5)
     double beta = 1.0;
     double gamma = 0.0;

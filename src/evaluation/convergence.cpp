@@ -100,15 +100,18 @@ void measure_faces(const ImplicitShape& shape, const DigitalSurface& surface, co
 /// Each face of the first kind is the same surfel (same voxel, same side) in both digitizations:
 /// its voxel is inside both, and the voxel across it is outside because F > 0 there.
 PointMatrix integral_invariant_input(const ImplicitShape& shape, const BinaryVolume& volume, const DigitalSurface& surface,
-                                     double radius, IntegralInvariantKernel kernel, double h, Connectivity connectivity) {
-    if (!(shape.clipped[0] || shape.clipped[1] || shape.clipped[2]))
-        return integral_invariant_normals(volume, surface, radius, kernel);
+                                     double radius, const ConvergenceOptions& options, double h) {
+    const auto field = [&](const BinaryVolume& v, const DigitalSurface& s) {
+        return options.ii_extrapolate ? extrapolated_integral_invariant_normals(v, s, radius, options.ii_kernel)
+                                      : integral_invariant_normals(v, s, radius, options.ii_kernel);
+    };
+    if (!(shape.clipped[0] || shape.clipped[1] || shape.clipped[2])) return field(volume, surface);
     ImplicitShape unclipped = shape;
     for (int a = 0; a < 3; ++a)
         if (shape.clipped[std::size_t(a)]) unclipped.lower[a] -= radius + 2 * h, unclipped.upper[a] += radius + 2 * h;
     const BinaryVolume wide = digitize(unclipped, h);
-    const DigitalSurface wide_surface = extract_digital_surface(wide, connectivity);
-    const PointMatrix wide_u = integral_invariant_normals(wide, wide_surface, radius, kernel);
+    const DigitalSurface wide_surface = extract_digital_surface(wide, options.connectivity);
+    const PointMatrix wide_u = field(wide, wide_surface);
 
     // Surfel key: voxel index in the wide grid, axis and side.
     const auto key = [&](std::int64_t i, std::int64_t j, std::int64_t k, int axis, int sign) {
@@ -167,7 +170,7 @@ ConvergenceStep run_convergence_step(const ImplicitShape& shape, double h, const
     PointMatrix u;
     if (options.normals == InputNormalField::IntegralInvariant) {
         step.radius = options.radius_k * std::cbrt(h);
-        u = integral_invariant_input(shape, volume, surface, step.radius, options.ii_kernel, h, options.connectivity);
+        u = integral_invariant_input(shape, volume, surface, step.radius, options, h);
     } else {
         u = solid_exact_normals(shape, surface);
     }
