@@ -143,8 +143,14 @@ NormalLine parse_normal_line(const std::vector<std::string_view>& fields, const 
         parsed.normal[d] = value;
     }
     if (!parsed.normal.allFinite()) throw Error(reader.here() + ": the normal is not finite (NaN or infinity)");
-    const double length = parsed.normal.norm();
-    if (!(length > 0) || !std::isfinite(length)) throw Error(reader.here() + ": the normal is zero (or too small or large to normalize)");
+    const double largest = parsed.normal.cwiseAbs().maxCoeff();
+    if (!(largest > 0)) throw Error(reader.here() + ": the normal is zero");
+    double length = parsed.normal.norm();
+    if (!(length > 0) || !std::isfinite(length)) {
+        // |n|² under- or overflows (components near 1e-160 or 1e160): scale by the largest first.
+        parsed.normal /= largest;
+        length = parsed.normal.norm();
+    }
     if (std::abs(length - 1) > 1e-12) parsed.normal /= length;
     return parsed;
 }
