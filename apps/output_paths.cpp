@@ -20,4 +20,21 @@ void check_mesh_output_path(const std::string& option, const std::string& path) 
     check_output_folder(option, path);
 }
 
+void check_distinct_outputs(const std::vector<std::pair<std::string, std::string>>& outputs) {
+    // weakly_canonical resolves ".", "..", symbolic links and the current folder, so that
+    // "out/a.obj" and "./out/../out/a.obj" compare equal even before the files exist.
+    std::vector<std::pair<std::string, std::filesystem::path>> seen;
+    for (const auto& [option, path] : outputs) {
+        if (path.empty()) continue;
+        std::error_code error;
+        std::filesystem::path resolved = std::filesystem::weakly_canonical(std::filesystem::absolute(path), error);
+        if (error) resolved = std::filesystem::absolute(path).lexically_normal();
+        for (const auto& [other_option, other] : seen)
+            if (other == resolved)
+                throw Error(option + " " + path + ": same file as " + other_option +
+                            " (each output needs its own path)");
+        seen.emplace_back(option, resolved);
+    }
+}
+
 }  // namespace dsreg::cli

@@ -61,6 +61,11 @@ void check_options(RegularizeOptions& o) {
     if (!o.input_mesh.empty()) check_mesh_output_path("--input-mesh", o.input_mesh);
     if (!o.report.empty()) check_output_folder("--report", o.report);
     check_normal_field_options(o.normals, !o.source.shape.empty());
+    check_distinct_outputs({{"-o", o.output},
+                            {"--input-mesh", o.input_mesh},
+                            {"--report", o.report},
+                            {"--export-normals", o.normals.export_path},
+                            {"--features", o.normals.features_path}});
     parse_solver_kind(o.solver);
     if (!o.source.max_memory.empty()) parse_memory_size("--max-memory", o.source.max_memory);
     RegularizationWeights weights{o.alpha, o.beta, o.gamma, {}, {}};

@@ -19,7 +19,7 @@ expect_error() {  # expect_error NAME TEXT ARGS... : dsreg ARGS fails, mentions 
     local err
     err=$("$DSREG" "$@" 2>&1 >/dev/null)
     local code=$?
-    if [[ $code -eq 0 ]]; then echo "FAIL: $name: exit code 0"; failures=$((failures + 1)); return; fi
+    if [[ $code -ne 1 ]]; then echo "FAIL: $name: exit code $code (expected 1)"; failures=$((failures + 1)); return; fi
     if [[ $err != *"$text"* ]]; then echo "FAIL: $name: message '$err' lacks '$text'"; failures=$((failures + 1)); return; fi
     if compgen -G "$work/out.*" >/dev/null || compgen -G "$work/.out*" >/dev/null; then
         echo "FAIL: $name: output file left behind"; failures=$((failures + 1)); return
@@ -89,6 +89,13 @@ check "extrapolated ball integral invariants" grep -q '"ii_extrapolated": true' 
 check "report names the kernel" grep -q '"ii_kernel": "ball"' "$work/ext.json"
 check "default radius doubles with --ii-extrapolate" grep -q '"radius": 6.0,' "$work/ext.json"
 expect_error "unknown ii kernel" "ii-kernel" regularize --shape sphere1 --h 0.25 --ii-kernel gauss -o "$work/out.obj"
+expect_error "unknown option" "frobnicate" regularize --shape sphere1 --h 0.25 --frobnicate -o "$work/out.obj"
+expect_error "missing output" "output" regularize --shape sphere1 --h 0.25
+expect_error "no subcommand" "subcommand"
+expect_error "two outputs on one path" "same file as -o" regularize --shape sphere1 --h 0.25 -o "$work/out.obj" \
+    --input-mesh "$work/./out.obj"
+expect_error "report over the mesh" "same file as -o" regularize --shape sphere1 --h 0.25 -o "$work/out.obj" \
+    --report "$work/../$(basename "$work")/out.obj"
 
 # Broken normals files and inconsistent options are rejected before any output is written.
 grep -v '^#' "$work/at.normals" | tail -n +2 >"$work/missing.normals"
