@@ -115,7 +115,8 @@ void check_run_memory(const VolumeSourceOptions& o, std::int64_t voxels, std::in
 }
 
 double default_ii_radius(const LoadedVolume& loaded) {
-    return loaded.shape ? 3.0 * std::cbrt(loaded.h) : 3.0 * loaded.volume.grid.spacing.maxCoeff();
+    if (!loaded.shape) return 3.0 * loaded.volume.grid.spacing.maxCoeff();
+    return std::min(3.0 * std::cbrt(loaded.h), (loaded.shape->upper - loaded.shape->lower).maxCoeff() / 8.0);
 }
 
 double default_grid_step(const ImplicitShape& shape) { return (shape.upper - shape.lower).maxCoeff() / 64.0; }

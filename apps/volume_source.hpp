@@ -64,7 +64,9 @@ void check_run_memory(const VolumeSourceOptions& options, std::int64_t voxels, s
                       bool factorization);
 
 /// The default integral-invariant radius: 3 voxels for files; for shapes the multigrid-convergent
-/// r = 3·h^(1/3) (DESIGN.md), which is also 3 voxels at h = 1.
+/// r = 3·h^(1/3) (DESIGN.md), which is also 3 voxels at h = 1, but at most 1/8 of the largest
+/// side of the shape's box: 3·h^(1/3) suits shapes about 10 across, and on smaller ones (sphere1,
+/// heart) it would make a ball as wide as the shape.
 double default_ii_radius(const LoadedVolume& loaded);
 
 /// The automatic grid step: 1/64 of the largest extent of the shape's box.

@@ -87,7 +87,11 @@ check "convolved trivial normals" test -s "$work/ct.obj"
 "$DSREG" regularize --shape sphere9 --h 1 --ii-kernel ball --ii-extrapolate -o "$work/ext.obj" --report "$work/ext.json" -q
 check "extrapolated ball integral invariants" grep -q '"ii_extrapolated": true' "$work/ext.json"
 check "report names the kernel" grep -q '"ii_kernel": "ball"' "$work/ext.json"
-check "default radius doubles with --ii-extrapolate" grep -q '"radius": 6.0,' "$work/ext.json"
+"$DSREG" regularize --shape sphere1 -o "$work/s1.obj" --report "$work/s1.json" -q
+check "default radius at most 1/8 of a small shape's box" \
+    python3 -c "import json,sys; r=json.load(open(sys.argv[1]))['parameters']['radius']; sys.exit(0 if 0 < r <= 2.1 / 8 + 1e-9 else 1)" "$work/s1.json"
+"$DSREG" regularize --shape sphere9 --h 1 --ii-kernel ball -o "$work/noext.obj" --report "$work/noext.json" -q
+check "default radius doubles with --ii-extrapolate" python3 -c "import json,sys; r=[json.load(open(f))['parameters']['radius'] for f in sys.argv[1:]]; sys.exit(0 if abs(r[0] - 2 * r[1]) < 1e-12 else 1)" "$work/ext.json" "$work/noext.json"
 expect_error "unknown ii kernel" "ii-kernel" regularize --shape sphere1 --h 0.25 --ii-kernel gauss -o "$work/out.obj"
 expect_error "unknown option" "frobnicate" regularize --shape sphere1 --h 0.25 --frobnicate -o "$work/out.obj"
 expect_error "missing output" "output" regularize --shape sphere1 --h 0.25
