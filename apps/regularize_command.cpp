@@ -10,6 +10,7 @@
 #include "dsreg/atomic_file.hpp"
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/error.hpp"
+#include "dsreg/evaluation.hpp"
 #include "dsreg/mesh_io.hpp"
 #include "dsreg/normals_file.hpp"
 #include "dsreg/regularization.hpp"
@@ -147,7 +148,8 @@ void run(RegularizeOptions& o) {
     const DigitalSurface surface = extract_digital_surface(
         loaded.volume, o.connectivity == 6 ? Connectivity::Six : Connectivity::TwentySix);
     clock.finish(std::to_string(surface.face_count()) + " surfels, " + std::to_string(surface.vertex_count()) +
-                 " vertices, " + std::to_string(surface.component_count) + " components");
+                 " vertices, " + std::to_string(surface.component_count) +
+                 (surface.component_count == 1 ? " component" : " components"));
 
     const NormalField field = compute_normal_field(o.normals, loaded, surface, clock);
 
@@ -162,6 +164,10 @@ void run(RegularizeOptions& o) {
         run_regularization(o.extensions, loaded.volume, surface, field.normals, weights, solver, extension_report);
     clock.finish(result.solve.solver + ", relative residual " + format("%.2e", result.solve.relative_residual));
 
+    // Faces the solve turned against their normal (where u itself points inward, e.g. on parts
+    // thinner than the integral-invariant ball): reported, since they show as creases.
+    const std::int64_t folded = count_faces_against_field(result.positions, surface.quads, field.normals);
+
     clock.start("write");
     write_outputs(o, surface, field, result);
     clock.finish(o.output);
@@ -169,6 +175,7 @@ void run(RegularizeOptions& o) {
     if (!o.report.empty()) {
         nlohmann::json report = make_report(o, loaded, object_voxels, surface, field, result, weights, clock);
         report.update(extension_report);
+        report["counts"]["faces_against_field"] = folded;
         const std::string text = report.dump(2) + "\n";
         write_file_atomically(o.report, [&](std::ostream& out) { out << text; });
     }
@@ -180,6 +187,7 @@ void run(RegularizeOptions& o) {
              << "; energy " << format("%.4g", result.energy_before.total(weights)) << " -> "
              << format("%.4g", result.energy_after.total(weights)) << "; " << result.solve.solver << " residual "
              << format("%.1e", result.solve.relative_residual);
+        if (folded > 0) line << "; " << folded << " faces folded against u";
         if (field.at)
             line << "; Ambrosio-Tortorelli " << field.at->total_rounds() << " rounds, "
                  << (field.at->features.array() < o.normals.feature_threshold).count() << " feature vertices";

@@ -176,6 +176,20 @@ TEST(FaceNormals, TrianglesAndQuadsFollowTheFootnoteConvention) {
     EXPECT_TRUE(face_normals(v, degenerate).row(0).isZero());
 }
 
+TEST(FacesAgainstField, CountsFacesTurnedAgainstTheirVectorAndDegenerateOnes) {
+    const auto s = extract_digital_surface(test::make_ball(6, 1.8, 2.5), Connectivity::Six);
+    PointMatrix u = trivial_normals(s);  // outward, as the faces
+    EXPECT_EQ(count_faces_against_field(s.vertices, s.quads, u), 0);
+    EXPECT_EQ(count_faces_against_field(s.vertices, s.quads, PointMatrix(-u)), s.face_count());
+    u.row(3) *= -1.0;
+    u.row(7) *= -1.0;
+    EXPECT_EQ(count_faces_against_field(s.vertices, s.quads, u), 2);
+    PointMatrix collapsed = s.vertices;  // face 0 shrunk to a point: no normal
+    for (int k = 0; k < 4; ++k) collapsed.row(s.quads(0, k)) = s.vertices.row(s.quads(0, 0));
+    EXPECT_GE(count_faces_against_field(collapsed, s.quads, trivial_normals(s)), 1);
+    EXPECT_THROW(count_faces_against_field(s.vertices, s.quads, PointMatrix(2, 3)), Error);
+}
+
 TEST(TriangleAngles, EquilateralTrianglesHaveSixtyDegrees) {
     const PolygonMesh mesh = octahedron();
     for (double angle : triangle_min_angles(mesh.vertices, mesh.faces)) EXPECT_NEAR(angle, 60.0, 1e-12);

@@ -64,6 +64,11 @@ std::vector<double> geometric_steps(double largest, double smallest, int count);
 /// Unit normal of every face (triangles or quads, see above); a zero row for a degenerate face.
 PointMatrix face_normals(const PointMatrix& vertices, const FaceMatrix& faces);
 
+/// Number of faces whose normal (face_normals) points against their row of `field` (negative
+/// dot product) or is undefined (degenerate face): faces folded over or turned inside out, e.g.
+/// by a regularization that follows a field pointing inward. field: one vector per face.
+std::int64_t count_faces_against_field(const PointMatrix& vertices, const FaceMatrix& faces, const PointMatrix& field);
+
 /// Mean of the vertices of every face.
 PointMatrix face_centroids(const PointMatrix& vertices, const FaceMatrix& faces);
 

@@ -45,6 +45,17 @@ PointMatrix face_normals(const PointMatrix& vertices, const FaceMatrix& faces) {
     return normals;
 }
 
+std::int64_t count_faces_against_field(const PointMatrix& vertices, const FaceMatrix& faces, const PointMatrix& field) {
+    if (field.rows() != faces.rows())
+        throw Error("count_faces_against_field: " + std::to_string(field.rows()) + " field vectors for " +
+                    std::to_string(faces.rows()) + " faces");
+    const PointMatrix normals = face_normals(vertices, faces);
+    std::int64_t against = 0;
+    for (Eigen::Index f = 0; f < faces.rows(); ++f)
+        against += (normals.row(f).squaredNorm() == 0 || normals.row(f).dot(field.row(f)) < 0) ? 1 : 0;
+    return against;
+}
+
 PointMatrix face_centroids(const PointMatrix& vertices, const FaceMatrix& faces) {
     PointMatrix centroids = PointMatrix::Zero(faces.rows(), 3);
     for (Eigen::Index f = 0; f < faces.rows(); ++f) {
