@@ -75,37 +75,37 @@ double mean_error_deg(const PointMatrix& u, const PointMatrix& truth) {
     return sum / double(u.rows());
 }
 
-TEST(Normals, BiweightKernelIsCloserToTheTrueNormalsThanTheBall) {
-    // Goursat at h = 0.25, r = 3·h^(1/3) = 7.56 voxels (the reference set-up of docs/accuracy.md):
-    // the ball field is 1.32° off, mostly from the curvature variation across the ball (O(r²));
-    // the biweight weighs the nearer voxels more and fades out those entering or leaving the ball.
+/// Goursat at h = 0.25 with r = 3·h^(1/3) = 7.56 voxels: the reference set-up of docs/accuracy.md.
+struct GoursatQuarter {
     const ImplicitShape shape = make_shape("goursat");
     const double h = 0.25, r = 3.0 * std::cbrt(h);
     const BinaryVolume volume = digitize(shape, h);
-    const DigitalSurface s = extract_digital_surface(volume, Connectivity::TwentySix);
-    const PointMatrix truth = exact_normals(shape, s);
-    const double ball = mean_error_deg(integral_invariant_normals(volume, s, r, IntegralInvariantKernel::ball), truth);
-    const double biweight =
-        mean_error_deg(integral_invariant_normals(volume, s, r, IntegralInvariantKernel::biweight), truth);
+    const DigitalSurface surface = extract_digital_surface(volume, Connectivity::TwentySix);
+    const PointMatrix truth = exact_normals(shape, surface);
+};
+
+TEST(Normals, BiweightKernelIsCloserToTheTrueNormalsThanTheBall) {
+    // The ball field is 1.32° off, mostly from the curvature variation across the ball (O(r²));
+    // the biweight weighs the nearer voxels more and fades out those entering or leaving the ball.
+    const GoursatQuarter g;
+    const double ball =
+        mean_error_deg(integral_invariant_normals(g.volume, g.surface, g.r, IntegralInvariantKernel::ball), g.truth);
+    const double biweight = mean_error_deg(integral_invariant_normals(g.volume, g.surface, g.r), g.truth);
     EXPECT_LT(biweight, 0.85 * ball) << "ball " << ball << "°, biweight " << biweight << "°";
     EXPECT_LT(biweight, 1.0);
 }
 
 TEST(Normals, ExtrapolationRemovesTheRadiusBias) {
-    // Same set-up: the single-scale field's error is mostly a bias growing like r², which the
-    // extrapolation 2·n(r/√2) − n(r) cancels; so twice the radius (half the noise) can be used.
-    const ImplicitShape shape = make_shape("goursat");
-    const double h = 0.25, r = 3.0 * std::cbrt(h);
-    const BinaryVolume volume = digitize(shape, h);
-    const DigitalSurface s = extract_digital_surface(volume, Connectivity::TwentySix);
-    const PointMatrix truth = exact_normals(shape, s);
-    const double single = mean_error_deg(integral_invariant_normals(volume, s, r), truth);
-    const double single_wide = mean_error_deg(integral_invariant_normals(volume, s, 2 * r), truth);
-    const PointMatrix u = extrapolated_integral_invariant_normals(volume, s, 2 * r);
-    const double extrapolated = mean_error_deg(u, truth);
+    // The single-scale field's error is mostly a bias growing like r², which the extrapolation
+    // 2·n(r/√2) − n(r) cancels; so twice the radius (half the noise) can be used.
+    const GoursatQuarter g;
+    const double single = mean_error_deg(integral_invariant_normals(g.volume, g.surface, g.r), g.truth);
+    const double single_wide = mean_error_deg(integral_invariant_normals(g.volume, g.surface, 2 * g.r), g.truth);
+    const PointMatrix u = extrapolated_integral_invariant_normals(g.volume, g.surface, 2 * g.r);
+    const double extrapolated = mean_error_deg(u, g.truth);
     EXPECT_LT(extrapolated, 0.7 * single) << "single scale r " << single << "°, extrapolated 2r " << extrapolated << "°";
     EXPECT_LT(extrapolated, 0.4 * single_wide) << "single scale 2r " << single_wide << "°";
-    for (std::int64_t f = 0; f < s.face_count(); ++f) EXPECT_NEAR(u.row(f).norm(), 1.0, 1e-12);
+    for (std::int64_t f = 0; f < u.rows(); ++f) EXPECT_NEAR(u.row(f).norm(), 1.0, 1e-12);
 }
 
 TEST(Normals, ExtrapolationKeepsTheNarrowScaleWhereScalesDisagree) {
