@@ -112,7 +112,7 @@ nlohmann::json make_report(const RegularizeOptions& o, const LoadedVolume& loade
                        {"note", result.solve.note},
                        {"multigrid_levels", result.solve.multigrid_levels},
                        {"iterations", result.solve.iterations},
-                       {"factor_nonzeros", result.solve.factor_nonzeros},
+                       {"factor_nonzeros", std::int64_t(result.solve.factor_nonzeros)},
                        {"unknowns", 3 * surface.vertex_count()}};
     report["energy_before"] = energy_json(result.energy_before, weights);
     report["energy_after"] = energy_json(result.energy_after, weights);

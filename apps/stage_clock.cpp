@@ -31,10 +31,10 @@ double StageClock::total_seconds() const {
     return total;
 }
 
-double peak_memory_bytes() {
+std::int64_t peak_memory_bytes() {
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
-    return double(usage.ru_maxrss) * 1024.0;  // Linux reports KiB
+    return std::int64_t(usage.ru_maxrss) * 1024;  // Linux reports KiB
 }
 
 std::string human_bytes(double bytes) {

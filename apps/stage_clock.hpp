@@ -2,6 +2,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -30,7 +31,7 @@ private:
 };
 
 /// Peak resident memory of this process so far, in bytes.
-double peak_memory_bytes();
+std::int64_t peak_memory_bytes();
 
 /// "1.5 GiB", "230 MiB", ...
 std::string human_bytes(double bytes);
