@@ -111,6 +111,7 @@ nlohmann::json make_report(const RegularizeOptions& o, const LoadedVolume& loade
                        {"solver", result.solve.solver},
                        {"note", result.solve.note},
                        {"multigrid_levels", result.solve.multigrid_levels},
+                       {"operator_complexity", result.solve.operator_complexity},
                        {"iterations", result.solve.iterations},
                        {"factor_nonzeros", std::int64_t(result.solve.factor_nonzeros)},
                        {"unknowns", 3 * surface.vertex_count()}};
