@@ -207,11 +207,20 @@ private:
         if (words_.size() != 3 || !parse_unsigned(words_[2], element.count)) {
             throw Error(here() + ": expected 'element <name> <count>'");
         }
-        element.name = std::string(words_[1]);
+        element.name = checked_name("element", words_[1]);
         for (const PlyElement& other : header_.elements) {
             if (other.name == element.name) throw Error(here() + ": element '" + element.name + "' is declared twice");
         }
         header_.elements.push_back(std::move(element));
+    }
+
+    /// Element and property names are words of printable ASCII (so that a vertex scalar read
+    /// from a PLY file can always be written to one again).
+    std::string checked_name(const char* what, std::string_view name) const {
+        if (std::all_of(name.begin(), name.end(), [](char c) { return c > ' ' && c < 127; })) return std::string(name);
+        std::string shown;
+        for (std::size_t i = 0; i < name.size() && i < 40; ++i) shown += (name[i] > ' ' && name[i] < 127) ? name[i] : '?';
+        throw Error(here() + ": " + what + " name '" + shown + "' is not printable ASCII");
     }
 
     void parse_property() {
@@ -229,7 +238,7 @@ private:
         } else {
             throw Error(here() + ": expected 'property <type> <name>' or 'property list <type> <type> <name>'");
         }
-        property.name = std::string(words_.back());
+        property.name = checked_name("property", words_.back());
         std::vector<PlyProperty>& properties = header_.elements.back().properties;
         for (const PlyProperty& other : properties) {
             if (other.name == property.name)
