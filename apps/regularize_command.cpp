@@ -69,6 +69,16 @@ void check_options(RegularizeOptions& o) {
                             {"--features", o.normals.features_path}});
     parse_solver_kind(o.solver);
     if (!o.source.max_memory.empty()) parse_memory_size("--max-memory", o.source.max_memory);
+    // The library checks the weights too; here the message names the option as it was typed.
+    const auto check_weight = [](const char* option, double value, bool zero_allowed) {
+        if ((zero_allowed ? value >= 0 : value > 0) && std::isfinite(value)) return;
+        throw Error(std::string(option) + " " + format("%g", value) + ": must be " +
+                    (zero_allowed ? "zero or positive" : "positive (the data term keeps the system positive definite)") +
+                    " and finite");
+    };
+    check_weight("--alpha", o.alpha, false);
+    check_weight("--beta", o.beta, true);
+    check_weight("--gamma", o.gamma, true);
     RegularizationWeights weights{o.alpha, o.beta, o.gamma, {}, {}};
     validate_weights(weights, 0, 0);
     check_regularization_extension_options(o.extensions);
@@ -99,6 +109,8 @@ nlohmann::json make_report(const RegularizeOptions& o, const LoadedVolume& loade
                         {"split_pointels", surface.split_pointel_count},
                         {"euler_characteristics", component_euler_characteristics(surface)}};
     report["parameters"] = {{"alpha", o.alpha}, {"beta", o.beta}, {"gamma", o.gamma},
+                            {"min", o.source.min_value ? nlohmann::json(*o.source.min_value) : nlohmann::json(nullptr)},
+                            {"max", o.source.max_value ? nlohmann::json(*o.source.max_value) : nlohmann::json(nullptr)},
                             {"connectivity", o.connectivity}, {"normals", o.normals.kind},
                             {"normals_input", field.input},
                             {"radius", field.radius ? nlohmann::json(*field.radius) : nlohmann::json(nullptr)},
@@ -138,6 +150,9 @@ void run(RegularizeOptions& o) {
     const LoadedVolume loaded = load_volume(o.source);
     const std::int64_t object_voxels = loaded.volume.object_voxel_count();
     clock.finish(std::to_string(object_voxels) + " object voxels");
+    if (object_voxels == 0 && o.source.shape.empty())
+        throw Error(o.source.input_path + ": the object is empty: no voxel has " + object_value_range(o.source) +
+                    " (choose the object's values with --min and --max)");
     if (!o.source.max_memory.empty()) {
         // Before anything proportional to the surface is allocated: count its surfels (one pass).
         const SolverKind kind = parse_solver_kind(o.solver);

@@ -190,4 +190,11 @@ LoadedVolume load_volume(const VolumeSourceOptions& o) {
     return o.shape.empty() ? read_file(o) : digitize_shape(o);
 }
 
+std::string object_value_range(const VolumeSourceOptions& o) {
+    const std::string low = o.min_value ? format_number(*o.min_value) + " <= " : "0 < ";
+    const std::string high = o.max_value ? " <= " + format_number(*o.max_value) : "";
+    if (!o.max_value) return o.min_value ? "value >= " + format_number(*o.min_value) : "value > 0";
+    return low + "value" + high;
+}
+
 }  // namespace dsreg::cli

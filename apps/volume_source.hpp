@@ -63,6 +63,10 @@ double estimate_run_memory(std::int64_t voxels, std::int64_t surfels, bool facto
 void check_run_memory(const VolumeSourceOptions& options, std::int64_t voxels, std::int64_t surfels,
                       bool factorization);
 
+/// The values that make a voxel of a file part of the object, as the options give them:
+/// "value > 0", "value >= 300", "40 <= value <= 200", "0 < value <= 50".
+std::string object_value_range(const VolumeSourceOptions& options);
+
 /// The default integral-invariant radius: 3 voxels for files; for shapes the multigrid-convergent
 /// r = 3·h^(1/3) (DESIGN.md), which is also 3 voxels at h = 1, but at most 1/8 of the largest
 /// side of the shape's box: 3·h^(1/3) suits shapes about 10 across, and on smaller ones (sphere1,

@@ -57,7 +57,10 @@ expect_error "missing output folder" "no/such" regularize --shape sphere1 --h 0.
 expect_error "no input" "input" regularize -o "$work/out.obj"
 printf 'X: 4\nY: 4\nZ: 4\nVersion: 2\n.\n' >"$work/empty.vol"
 head -c 64 /dev/zero >>"$work/empty.vol"
-expect_error "empty object" "empty" regularize "$work/empty.vol" -o "$work/out.obj"
+expect_error "empty object" "no voxel has value > 0" regularize "$work/empty.vol" -o "$work/out.obj"
+expect_error "empty object names the range" "no voxel has 5 <= value <= 9" regularize "$work/empty.vol" --min 5 --max 9 \
+    -o "$work/out.obj"
+expect_error "alpha named as typed" "--alpha 0: must be positive" regularize --shape sphere1 --alpha 0 -o "$work/out.obj"
 
 # Piecewise-smooth normals (Ambrosio-Tortorelli): feature map in the PLY, feature lines, report.
 cube="x^20+y^20+z^20-1"
