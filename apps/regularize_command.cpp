@@ -150,9 +150,11 @@ void run(RegularizeOptions& o) {
     const LoadedVolume loaded = load_volume(o.source);
     const std::int64_t object_voxels = loaded.volume.object_voxel_count();
     clock.finish(std::to_string(object_voxels) + " object voxels");
-    if (object_voxels == 0 && o.source.shape.empty())
+    if (object_voxels == 0 && o.source.shape.empty()) {
+        const std::string values = file_value_range(o.source);
         throw Error(o.source.input_path + ": the object is empty: no voxel has " + object_value_range(o.source) +
-                    " (choose the object's values with --min and --max)");
+                    (values.empty() ? "" : "; " + values) + " (choose the object's values with --min and --max)");
+    }
     if (!o.source.max_memory.empty()) {
         // Before anything proportional to the surface is allocated: count its surfels (one pass).
         const SolverKind kind = parse_solver_kind(o.solver);

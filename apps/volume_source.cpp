@@ -148,13 +148,8 @@ LoadedVolume digitize_shape(const VolumeSourceOptions& o) {
     return loaded;
 }
 
-LoadedVolume read_file(const VolumeSourceOptions& o) {
-    ValueRange range;
-    if (o.min_value) range.has_min = true, range.min = *o.min_value;
-    if (o.max_value) range.has_max = true, range.max = *o.max_value;
-    VolumeLimits limits;
-    limits.max_voxels = memory_voxel_cap(o);
-    const bool memory_bound = limits.max_voxels < o.max_voxels;
+/// The layout of a .raw input given by the --raw-* options (unused for other formats).
+RawVolumeLayout raw_layout(const VolumeSourceOptions& o) {
     RawVolumeLayout layout;
     if (!o.raw_dims.empty()) {
         layout.dims = {o.raw_dims[0], o.raw_dims[1], o.raw_dims[2]};
@@ -162,6 +157,17 @@ LoadedVolume read_file(const VolumeSourceOptions& o) {
         layout.big_endian = o.raw_big_endian;
         layout.header_bytes = o.raw_header_bytes;
     }
+    return layout;
+}
+
+LoadedVolume read_file(const VolumeSourceOptions& o) {
+    ValueRange range;
+    if (o.min_value) range.has_min = true, range.min = *o.min_value;
+    if (o.max_value) range.has_max = true, range.max = *o.max_value;
+    VolumeLimits limits;
+    limits.max_voxels = memory_voxel_cap(o);
+    const bool memory_bound = limits.max_voxels < o.max_voxels;
+    const RawVolumeLayout layout = raw_layout(o);
     LoadedVolume loaded;
     try {
         loaded.volume = read_volume(o.input_path, range, o.raw_dims.empty() ? nullptr : &layout, limits);
@@ -195,6 +201,20 @@ std::string object_value_range(const VolumeSourceOptions& o) {
     const std::string high = o.max_value ? " <= " + format_number(*o.max_value) : "";
     if (!o.max_value) return o.min_value ? "value >= " + format_number(*o.min_value) : "value > 0";
     return low + "value" + high;
+}
+
+std::string file_value_range(const VolumeSourceOptions& o) {
+    try {
+        const RawVolumeLayout layout = raw_layout(o);
+        VolumeLimits limits;
+        limits.max_voxels = memory_voxel_cap(o);
+        const ScalarVolume values = read_volume_values(o.input_path, o.raw_dims.empty() ? nullptr : &layout, limits);
+        if (values.values.empty()) return "";
+        const auto [low, high] = std::minmax_element(values.values.begin(), values.values.end());
+        return "its values range from " + format_number(*low) + " to " + format_number(*high);
+    } catch (const std::exception&) {
+        return "";  // only a hint: a file too large for the limits, say
+    }
 }
 
 }  // namespace dsreg::cli

@@ -67,6 +67,10 @@ void check_run_memory(const VolumeSourceOptions& options, std::int64_t voxels, s
 /// "value > 0", "value >= 300", "40 <= value <= 200", "0 < value <= 50".
 std::string object_value_range(const VolumeSourceOptions& options);
 
+/// "its values range from A to B" for the input file (read again, 4 bytes per voxel), or "" when
+/// that cannot be read within the limits. For messages about an empty object.
+std::string file_value_range(const VolumeSourceOptions& options);
+
 /// The default integral-invariant radius: 3 voxels for files; for shapes the multigrid-convergent
 /// r = 3·h^(1/3) (DESIGN.md), which is also 3 voxels at h = 1, but at most 1/8 of the largest
 /// side of the shape's box: 3·h^(1/3) suits shapes about 10 across, and on smaller ones (sphere1,

@@ -60,6 +60,8 @@ head -c 64 /dev/zero >>"$work/empty.vol"
 expect_error "empty object" "no voxel has value > 0" regularize "$work/empty.vol" -o "$work/out.obj"
 expect_error "empty object names the range" "no voxel has 5 <= value <= 9" regularize "$work/empty.vol" --min 5 --max 9 \
     -o "$work/out.obj"
+expect_error "empty object gives the file's values" "its values range from 0 to 0" regularize "$work/empty.vol" \
+    -o "$work/out.obj"
 expect_error "alpha named as typed" "--alpha 0: must be positive" regularize --shape sphere1 --alpha 0 -o "$work/out.obj"
 
 # Piecewise-smooth normals (Ambrosio-Tortorelli): feature map in the PLY, feature lines, report.
