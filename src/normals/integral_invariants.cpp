@@ -198,8 +198,11 @@ IntegralInvariantKernel parse_integral_invariant_kernel(const std::string& name)
     throw Error("unknown integral-invariant kernel '" + name + "' (expected ball or biweight)");
 }
 
-PointMatrix integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface, double radius,
-                                       IntegralInvariantKernel kernel) {
+namespace {
+
+/// The field for one radius, from row runs built once by the caller.
+PointMatrix normals_from_runs(const BinaryVolume& volume, const RowRuns& rows, const DigitalSurface& surface,
+                              double radius, IntegralInvariantKernel kernel) {
     if (!(radius > 0) || !std::isfinite(radius))
         throw Error("integral invariant radius must be positive and finite (got " + std::to_string(radius) + ")");
     const Eigen::Vector3d& spacing = volume.grid.spacing;
@@ -208,7 +211,6 @@ PointMatrix integral_invariant_normals(const BinaryVolume& volume, const Digital
         throw Error("integral invariant radius " + std::to_string(radius) + " spans " +
                     std::to_string(std::lround((radius / spacing.array()).maxCoeff())) +
                     " voxels: its ball tables would exceed 768 MiB (use a radius below about 100 voxels)");
-    const RowRuns rows = build_row_runs(volume);
     Stencil stencils[3][2];
     for (int axis = 0; axis < 3; ++axis)
         for (int side = 0; side < 2; ++side)
@@ -223,12 +225,20 @@ PointMatrix integral_invariant_normals(const BinaryVolume& volume, const Digital
     return u;
 }
 
+}  // namespace
+
+PointMatrix integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface, double radius,
+                                       IntegralInvariantKernel kernel) {
+    return normals_from_runs(volume, build_row_runs(volume), surface, radius, kernel);
+}
+
 PointMatrix extrapolated_integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface,
                                                     double radius, IntegralInvariantKernel kernel) {
     // n(r) = n0 + b·r² + O(r⁴) (b: the curvature variation across the ball), so with
     // r' = r/√2, 2·n(r') − n(r) = n0 + O(r⁴): Richardson extrapolation to r = 0.
-    const PointMatrix wide = integral_invariant_normals(volume, surface, radius, kernel);
-    const PointMatrix narrow = integral_invariant_normals(volume, surface, radius / std::sqrt(2.0), kernel);
+    const RowRuns rows = build_row_runs(volume);  // one pass over the volume for both radii
+    const PointMatrix wide = normals_from_runs(volume, rows, surface, radius, kernel);
+    const PointMatrix narrow = normals_from_runs(volume, rows, surface, radius / std::sqrt(2.0), kernel);
     const double agreement = std::cos(30.0 * M_PI / 180.0);
     PointMatrix u(surface.face_count(), 3);
 #pragma omp parallel for schedule(static)
