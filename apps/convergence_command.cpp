@@ -7,6 +7,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "cli_text.hpp"
 #include "dsreg/atomic_file.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
@@ -39,23 +40,9 @@ struct StepRange {
     int count;
 };
 
-std::string format(const char* pattern, double value) {
-    char text[64];
-    std::snprintf(text, sizeof text, pattern, value);
-    return text;
-}
-
 double parse_number(const std::string& text, const std::string& whole) {
-    std::size_t used = 0;
-    double value = 0;
-    try {
-        value = std::stod(text, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (used == 0 || used != text.size())
-        throw Error("--h " + whole + ": '" + text + "' is not a number (expected MAX:MIN:COUNT, e.g. 0.2:0.006:12)");
-    return value;
+    if (const std::optional<double> value = parse_whole_number(text)) return *value;
+    throw Error("--h " + whole + ": '" + text + "' is not a number (expected MAX:MIN:COUNT, e.g. 0.2:0.006:12)");
 }
 
 /// "MAX:MIN:COUNT" → the geometric range (checked by geometric_steps).

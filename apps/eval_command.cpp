@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "cli_text.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
 #include "dsreg/mesh_io.hpp"
@@ -23,12 +24,6 @@ struct EvalOptions {
     int volume_cells = 64;
     bool json = false;
 };
-
-std::string format(const char* pattern, double value) {
-    char text[64];
-    std::snprintf(text, sizeof text, pattern, value);
-    return text;
-}
 
 nlohmann::json stats_json(const ErrorStats& s, bool with_p95) {
     nlohmann::json j = {{"mean", s.mean}, {"l2", s.l2}, {"linf", s.linf}};

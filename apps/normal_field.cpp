@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <fstream>
 
+#include "cli_text.hpp"
 #include "dsreg/atomic_file.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/normals.hpp"
@@ -14,26 +15,12 @@ namespace dsreg::cli {
 
 namespace {
 
-std::string format(const char* pattern, double value) {
-    char text[64];
-    std::snprintf(text, sizeof text, pattern, value);
-    return text;
-}
-
 bool given(const CLI::Option* option) { return option != nullptr && option->count() > 0; }
 
 /// A whole-string decimal number, or dsreg::Error naming --at-eps.
 double parse_epsilon(const std::string& text, const std::string& whole) {
-    std::size_t used = 0;
-    double value = 0;
-    try {
-        value = std::stod(text, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (used == 0 || used != text.size())
-        throw Error("--at-eps " + whole + ": '" + text + "' is not a number (expected EPS1:EPS2, e.g. 2:0.25)");
-    return value;
+    if (const std::optional<double> value = parse_whole_number(text)) return *value;
+    throw Error("--at-eps " + whole + ": '" + text + "' is not a number (expected EPS1:EPS2, e.g. 2:0.25)");
 }
 
 /// "2:0.25" → (2, 0.25); "0.5" → (0.5, 0.5).

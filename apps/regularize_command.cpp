@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "cli_text.hpp"
 #include "dsreg/atomic_file.hpp"
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/error.hpp"
@@ -34,12 +35,6 @@ struct RegularizeOptions {
     bool triangulate = false, quiet = false, verbose = false;
     ExtensionOptions extensions;  ///< --clamp, --metric, local weight maps
 };
-
-std::string format(const char* pattern, double value) {
-    char text[64];
-    std::snprintf(text, sizeof text, pattern, value);
-    return text;
-}
 
 /// The output mesh: quads (or triangles) with the field u per face and, after AT, the feature
 /// map v per vertex ("v" in PLY).
