@@ -2,31 +2,8 @@
 # End-to-end checks of `dsreg eval` and `dsreg convergence`: outputs, JSON keys, CSV columns,
 # exit codes, error messages, known answers on hand-written meshes (a cube and an octahedron
 # against the unit sphere), and that a failed run leaves no output behind.
-set -u
-: "${DSREG:?set DSREG to the dsreg executable}"
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-failures=0
-passes=0
-
-check() {  # check NAME COMMAND... : the command must succeed
-    local name=$1; shift
-    if "$@"; then passes=$((passes + 1)); else echo "FAIL: $name"; failures=$((failures + 1)); fi
-}
-
-expect_error() {  # expect_error NAME TEXT ARGS... : dsreg ARGS fails, mentions TEXT, leaves no $work/out*
-    local name=$1 text=$2; shift 2
-    rm -rf "$work"/out*
-    local err
-    err=$("$DSREG" "$@" 2>&1 >/dev/null)
-    local code=$?
-    if [[ $code -eq 0 ]]; then echo "FAIL: $name: exit code 0"; failures=$((failures + 1)); return; fi
-    if [[ $err != *"$text"* ]]; then echo "FAIL: $name: message '$err' lacks '$text'"; failures=$((failures + 1)); return; fi
-    if compgen -G "$work/out*" >/dev/null || compgen -G "$work/.out*" >/dev/null; then
-        echo "FAIL: $name: output left behind"; failures=$((failures + 1)); return
-    fi
-    passes=$((passes + 1))
-}
+OUTPUTS='out*'
+source "$(dirname "$0")/cli_harness.sh"
 
 # --- eval ------------------------------------------------------------------------------------
 "$DSREG" regularize --shape sphere1 --h 0.1 --normals exact -o "$work/s.obj" --input-mesh "$work/digital.off" -q
@@ -171,5 +148,4 @@ mkdir -p "$work/keep" && echo precious >"$work/keep/convergence.csv"
 "$DSREG" convergence --shape plane --h 0.2:0.1:2 --wall-margin 5 --out "$work/keep" -q >/dev/null 2>&1
 check "existing csv kept on failure" grep -q precious "$work/keep/convergence.csv"
 
-echo "$passes passed, $failures failed"
-[[ $failures -eq 0 ]]
+finish

@@ -1,31 +1,8 @@
 #!/usr/bin/env bash
 # End-to-end checks of the dsreg command: outputs, report, exit codes, error messages, and that
 # a failed run leaves no output behind and never truncates an existing file.
-set -u
-: "${DSREG:?set DSREG to the dsreg executable}"
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-failures=0
-passes=0
-
-check() {  # check NAME COMMAND... : the command must succeed
-    local name=$1; shift
-    if "$@"; then passes=$((passes + 1)); else echo "FAIL: $name"; failures=$((failures + 1)); fi
-}
-
-expect_error() {  # expect_error NAME TEXT ARGS... : dsreg ARGS fails, mentions TEXT, leaves no $work/out.*
-    local name=$1 text=$2; shift 2
-    rm -f "$work"/out.*
-    local err
-    err=$("$DSREG" "$@" 2>&1 >/dev/null)
-    local code=$?
-    if [[ $code -ne 1 ]]; then echo "FAIL: $name: exit code $code (expected 1)"; failures=$((failures + 1)); return; fi
-    if [[ $err != *"$text"* ]]; then echo "FAIL: $name: message '$err' lacks '$text'"; failures=$((failures + 1)); return; fi
-    if compgen -G "$work/out.*" >/dev/null || compgen -G "$work/.out*" >/dev/null; then
-        echo "FAIL: $name: output file left behind"; failures=$((failures + 1)); return
-    fi
-    passes=$((passes + 1))
-}
+OUTPUTS='out.*'
+source "$(dirname "$0")/cli_harness.sh"
 
 # A successful run writes the mesh, the digital surface and a report.
 "$DSREG" regularize --shape sphere9 --h 1 -o "$work/sphere.obj" --input-mesh "$work/digital.ply" \
@@ -176,5 +153,4 @@ expect_error "max-memory below the minimum" "is below" regularize "$work/one.vol
 "$DSREG" regularize "$work/one.vol" --max-memory 1G -o "$work/mem.obj" -q
 check "max-memory large enough" test -s "$work/mem.obj"
 
-echo "$passes passed, $failures failed"
-[[ $failures -eq 0 ]]
+finish
