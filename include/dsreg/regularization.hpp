@@ -84,7 +84,7 @@ struct RegularizationResult {
     SolveReport solve;
     EnergyTerms energy_before;  ///< terms at p̂ = p
     EnergyTerms energy_after;   ///< terms at p̂ = p*
-    double assembly_seconds = 0;  ///< wall time to build R and b
+    double assembly_seconds = 0;  ///< wall time to set up R (matrix-free operator, or assembly) and b
     double solve_seconds = 0;     ///< wall time of the solver (factorization included)
 };
 

@@ -23,6 +23,8 @@
 #include <string>
 #include <vector>
 
+#include "dsreg/progress.hpp"
+
 namespace dsreg {
 
 enum class SolverKind {
@@ -56,6 +58,11 @@ struct SolverOptions {
     /// For regularize(): if > 0 (and max_error is 0), max_error = this × the smallest voxel side.
     /// regularize() always fills smallest_eigenvalue from the weights.
     double max_error_voxels = 0;
+    /// Iterative solvers report each iteration here (stage "solve": fraction of the way to the
+    /// stop, in log scale of the residual; detail "amg iteration 12, error bound 3.1e-04 voxel
+    /// (target 5e-05)", in voxels when max_error_voxels is set, else in length units). Called
+    /// from the calling thread; may throw (e.g. dsreg::Interrupted) to abandon the solve.
+    ProgressCallback progress;
 };
 
 /// The accuracy the dsreg command asks of iterative solvers (max_error_voxels): 5e-5 voxel, half

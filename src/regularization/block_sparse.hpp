@@ -5,6 +5,9 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <omp.h>
+
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -34,6 +37,60 @@ struct BlockMatrix {
     /// The same matrix as scalar column-major CSC (for CHOLMOD on the coarsest level).
     Eigen::SparseMatrix<double> to_scalar() const;
 };
+
+/// Builds a block matrix row by row in parallel (Gustavson): `fill_row(i, block)` adds into
+/// `block(j)`, a zero-initialized 3×3 accumulator for column j of row i; `row_bound(i)` is an upper
+/// bound on the blocks of row i. Each thread fills a contiguous range of rows into a piece reserved
+/// from the bounds (no reallocation: memory is touched once), then copies it into place.
+template <class FillRow, class RowBound>
+BlockMatrix build_by_rows(std::int64_t rows, std::int64_t cols, FillRow fill_row, RowBound row_bound) {
+    const int threads = rows >= kParallelMinRows ? omp_get_max_threads() : 1;
+    std::vector<std::int64_t> row_count(static_cast<std::size_t>(rows), 0);
+    std::vector<std::int64_t> piece_first(static_cast<std::size_t>(threads) + 1, 0);
+    BlockMatrix out;
+    out.rows = rows;
+    out.cols = cols;
+    out.start.assign(std::size_t(rows + 1), 0);
+#pragma omp parallel num_threads(threads)
+    {
+        const int t = omp_get_thread_num(), nt = omp_get_num_threads();
+        const std::int64_t first = rows * t / nt, last = rows * (t + 1) / nt;
+        std::vector<std::int32_t> slot(static_cast<std::size_t>(cols), -1);
+        std::int64_t bound = 0;
+        for (std::int64_t i = first; i < last; ++i) bound += std::min<std::int64_t>(row_bound(i), cols);
+        std::vector<std::int32_t> columns;
+        std::vector<Eigen::Matrix3d> blocks;
+        columns.reserve(std::size_t(bound));
+        blocks.reserve(std::size_t(bound));
+        for (std::int64_t i = first; i < last; ++i) {
+            const std::size_t row_begin = columns.size();
+            const auto block = [&](std::int32_t j) -> Eigen::Matrix3d& {
+                std::int32_t& s = slot[std::size_t(j)];
+                if (s < 0) {
+                    s = std::int32_t(columns.size() - row_begin);
+                    columns.push_back(j);
+                    blocks.push_back(Eigen::Matrix3d::Zero());
+                }
+                return blocks[row_begin + std::size_t(s)];
+            };
+            fill_row(i, block);
+            for (std::size_t q = row_begin; q < columns.size(); ++q) slot[std::size_t(columns[q])] = -1;
+            row_count[std::size_t(i)] = std::int64_t(columns.size() - row_begin);
+        }
+        piece_first[std::size_t(t) + 1] = std::int64_t(columns.size());
+#pragma omp barrier
+#pragma omp single
+        {
+            for (int p = 0; p < nt; ++p) piece_first[std::size_t(p) + 1] += piece_first[std::size_t(p)];
+            for (std::int64_t i = 0; i < rows; ++i) out.start[std::size_t(i + 1)] = out.start[std::size_t(i)] + row_count[std::size_t(i)];
+            out.column.resize(std::size_t(out.start.back()));
+            out.block.resize(std::size_t(out.start.back()));
+        }  // implicit barrier
+        std::copy(columns.begin(), columns.end(), out.column.begin() + piece_first[std::size_t(t)]);
+        std::copy(blocks.begin(), blocks.end(), out.block.begin() + piece_first[std::size_t(t)]);
+    }
+    return out;
+}
 
 BlockMatrix transpose(const BlockMatrix& a);
 

@@ -7,8 +7,6 @@
 
 namespace dsreg::detail {
 
-namespace {
-
 double infinity_norm(const ScalarRows& R) {
     double largest = 0;
 #pragma omp parallel for schedule(static) reduction(max : largest)
@@ -20,11 +18,15 @@ double infinity_norm(const ScalarRows& R) {
     return largest;
 }
 
-}  // namespace
-
 CgResult preconditioned_conjugate_gradient(const ScalarRows& R, const Eigen::VectorXd& b, Eigen::VectorXd& x,
                                            const Preconditioner& preconditioner, const CgStop& stop) {
-    const double norm_b = b.norm(), norm_R = infinity_norm(R);
+    const LinearOperator product = [&](const Eigen::VectorXd& in, Eigen::VectorXd& out) { multiply_operator(R, in, out); };
+    return preconditioned_conjugate_gradient(product, infinity_norm(R), b, x, preconditioner, stop);
+}
+
+CgResult preconditioned_conjugate_gradient(const LinearOperator& multiply, double norm_R, const Eigen::VectorXd& b,
+                                           Eigen::VectorXd& x, const Preconditioner& preconditioner, const CgStop& stop) {
+    const double norm_b = b.norm();
     const auto target = [&](const Eigen::VectorXd& at) {
         const double wanted = stop.absolute_residual > 0 ? stop.absolute_residual : stop.relative_residual * norm_b;
         return std::max(wanted, stop.backward_error * (norm_R * at.norm() + norm_b));
@@ -33,7 +35,7 @@ CgResult preconditioned_conjugate_gradient(const ScalarRows& R, const Eigen::Vec
     Eigen::VectorXd r(b.size()), z(b.size()), p, q(b.size());
     CgResult result;
     for (int restart = 0; restart <= max_restarts; ++restart) {
-        multiply_operator(R, x, q);
+        multiply(x, q);
         r = b - q;
         if (r.norm() <= target(x)) {
             result.converged = true;
@@ -43,7 +45,7 @@ CgResult preconditioned_conjugate_gradient(const ScalarRows& R, const Eigen::Vec
         p = z;
         double rz = r.dot(z);
         while (result.iterations < stop.max_iterations) {
-            multiply_operator(R, p, q);
+            multiply(p, q);
             const double curvature = p.dot(q);
             if (!(curvature > 0) || !(rz > 0))
                 throw Error("conjugate gradient: the matrix or the preconditioner is not positive definite (iteration " +
@@ -52,7 +54,9 @@ CgResult preconditioned_conjugate_gradient(const ScalarRows& R, const Eigen::Vec
             x += step * p;
             r -= step * q;
             ++result.iterations;
-            if (r.norm() <= target(x)) break;  // confirm on the true residual above
+            const double residual = r.norm(), wanted = target(x);
+            if (stop.monitor) stop.monitor(result.iterations, residual, wanted);
+            if (residual <= wanted) break;  // confirm on the true residual above
             preconditioner(r, z);
             const double rz_next = r.dot(z);
             p = z + (rz_next / rz) * p;
@@ -60,7 +64,7 @@ CgResult preconditioned_conjugate_gradient(const ScalarRows& R, const Eigen::Vec
         }
         if (result.iterations >= stop.max_iterations) break;
     }
-    multiply_operator(R, x, q);
+    multiply(x, q);
     result.converged = (b - q).norm() <= target(x);
     return result;
 }

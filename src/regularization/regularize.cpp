@@ -1,28 +1,140 @@
-#include "dsreg/regularization.hpp"
-
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+
+#include "dsreg/regularization.hpp"
+#include "mesh_parts.hpp"
+#include "regularization_operator.hpp"
+#include "spd_system.hpp"
 
 namespace dsreg {
 
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+/// Components of at most this many vertices are solved directly, in batches of about
+/// kBatchVertices vertices: amg's coarsest level has 400 nodes, so amg would factor them anyway.
+constexpr std::int64_t kSmallComponentVertices = 400;
+constexpr std::int64_t kBatchVertices = 20000;
+
+/// The solver of a part: the batches of small components go to CHOLMOD whatever the choice.
+SolverOptions part_options(const SolverOptions& options, const detail::MeshPart& part) {
+    SolverOptions o = options;
+    if (part.small) o.kind = SolverKind::Cholmod;
+    return o;
+}
+
+/// Progress of the part's solve mapped into [first, first + share] of the whole solve.
+ProgressCallback part_progress(const ProgressCallback& progress, double first, double share) {
+    if (!progress) return {};
+    return [=](const ProgressEvent& e) {
+        progress(ProgressEvent{e.stage, e.fraction < 0 ? -1.0 : first + share * e.fraction, e.detail});
+    };
+}
+
+/// The reports of the parts as one: the largest part's solver and work, the largest error bound
+/// (each part's bounds every vertex of that part), the residual of the whole system.
+struct MergedReport {
+    SolveReport report;
+    double residual_squared = 0, rhs_squared = 0;
+    std::int64_t small_components = 0;
+    bool first = true;
+
+    void add(const SolveReport& r, const detail::MeshPart& part, double residual_norm, double rhs_norm) {
+        residual_squared += residual_norm * residual_norm;
+        rhs_squared += rhs_norm * rhs_norm;
+        report.factor_nonzeros += r.factor_nonzeros;
+        report.error_bound = std::max(report.error_bound, r.error_bound);
+        if (part.small) small_components += part.components;
+        if (first) {
+            const double factor = report.factor_nonzeros, bound = report.error_bound;
+            report = r;
+            report.factor_nonzeros = factor;
+            report.error_bound = bound;
+            first = false;
+        } else {
+            report.iterations = std::max(report.iterations, r.iterations);
+        }
+    }
+
+    SolveReport finish() {
+        const double norm_b = std::sqrt(rhs_squared), norm_r = std::sqrt(residual_squared);
+        report.relative_residual = norm_b > 0 ? norm_r / norm_b : norm_r;
+        if (small_components > 0) {
+            const std::string note = std::to_string(small_components) + " small component" + (small_components > 1 ? "s" : "") +
+                                     " (at most " + std::to_string(kSmallComponentVertices) + " vertices) solved directly";
+            report.note = report.note.empty() ? note : report.note + "; " + note;
+        }
+        return report;
+    }
+};
+
+/// Solves R x = b of one part (x: warm start on entry), matrix-free unless CHOLMOD is needed.
+/// Adds the time to set up the operator (links, incidences, one pass over R's block rows) to
+/// `assembly_seconds`, the solver's to `solve_seconds`.
+SolveReport solve_part(const PointMatrix& positions, const FaceMatrix& quads, const PointMatrix& normals,
+                       const RegularizationWeights& weights, const SolverOptions& options, Eigen::VectorXd& x,
+                       double& residual_norm, double& rhs_norm, RegularizationResult& times) {
+    auto started = Clock::now();
+    const std::int64_t n = positions.rows();
+    const VertexLinks links = vertex_links(quads, n);
+    const detail::RegularizationOperator R(quads, links, normals, weights, n);
+    Eigen::VectorXd b(3 * n);
+    for (std::int64_t i = 0; i < n; ++i) b.segment<3>(3 * i) = (weights.alpha * detail::data_weight(weights, i)) * positions.row(i).transpose();
+    const detail::OperatorSystem system(R, smallest_eigenvalue_bound(weights, n));
+    times.assembly_seconds += seconds_since(started);
+    started = Clock::now();
+    const SolveReport report = detail::solve_system(system, b, x, options);
+    times.solve_seconds += seconds_since(started);
+    rhs_norm = b.norm();
+    residual_norm = report.relative_residual * (rhs_norm > 0 ? rhs_norm : 1.0);
+    return report;
+}
+
+}  // namespace
+
 RegularizationResult regularize(const DigitalSurface& surface, const PointMatrix& normals,
                                 const RegularizationWeights& weights, const SolverOptions& solver) {
-    using Clock = std::chrono::steady_clock;
-    const auto seconds_since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+    const std::int64_t n = surface.vertex_count();
+    validate_weights(weights, n, surface.face_count());
+    if (normals.rows() != surface.face_count())
+        throw Error("normal field has " + std::to_string(normals.rows()) + " vectors for " + std::to_string(surface.face_count()) + " faces");
     RegularizationResult result;
-    auto started = Clock::now();
-    const VertexLinks links = vertex_links(surface.quads, surface.vertex_count());
-    const RegularizationSystem system =
-        assemble_regularization_system(surface.vertices, surface.quads, links, normals, weights);
-    result.assembly_seconds = seconds_since(started);
-    Eigen::VectorXd x = flatten_points(surface.vertices);  // warm start at p
-    started = Clock::now();
     SolverOptions options = solver;
-    if (!(options.smallest_eigenvalue > 0)) options.smallest_eigenvalue = smallest_eigenvalue_bound(weights, surface.vertex_count());
+    if (!(options.smallest_eigenvalue > 0)) options.smallest_eigenvalue = smallest_eigenvalue_bound(weights, n);
     if (options.max_error == 0 && options.max_error_voxels > 0)
         options.max_error = options.max_error_voxels * surface.grid.spacing.minCoeff();
-    result.solve = solve_spd(system.matrix, system.rhs, x, options);
-    result.solve_seconds = seconds_since(started);
+
+    auto started = Clock::now();
+    const std::vector<detail::MeshPart> parts = detail::mesh_parts(surface.quads, n, kSmallComponentVertices, kBatchVertices);
+    result.assembly_seconds = seconds_since(started);
+    Eigen::VectorXd x = flatten_points(surface.vertices);  // warm start at p
+    MergedReport merged;
+    double done = 0;
+    for (const detail::MeshPart& part : parts) {
+        SolverOptions o = part_options(options, part);
+        const double share = double(part.vertices.size()) / double(std::max<std::int64_t>(n, 1));
+        o.progress = part_progress(options.progress, done, share);
+        double residual_norm = 0, rhs_norm = 0;
+        SolveReport r;
+        if (part.whole) {
+            r = solve_part(surface.vertices, surface.quads, normals, weights, o, x, residual_norm, rhs_norm, result);
+        } else {
+            started = Clock::now();
+            const detail::PartMesh mesh = detail::extract_part(part, surface.vertices, surface.quads, normals, weights);
+            Eigen::VectorXd local = detail::gather_part(part, x);
+            result.assembly_seconds += seconds_since(started);
+            r = solve_part(mesh.positions, mesh.quads, mesh.normals, mesh.weights, o, local, residual_norm, rhs_norm, result);
+            detail::scatter_part(part, local, x);
+        }
+        merged.add(r, part, residual_norm, rhs_norm);
+        done += share;
+    }
+    result.solve = merged.finish();
     result.positions = unflatten_points(x);
+    const VertexLinks links = vertex_links(surface.quads, n);
     result.energy_before = regularization_energy(surface.vertices, surface.vertices, surface.quads, links, normals, weights);
     result.energy_after = regularization_energy(result.positions, surface.vertices, surface.quads, links, normals, weights);
     return result;

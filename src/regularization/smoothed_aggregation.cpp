@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "dsreg/error.hpp"
+#include "regularization_operator.hpp"
 
 namespace dsreg::detail {
 
@@ -224,14 +225,65 @@ std::vector<std::int32_t> aggregate_nodes(const StrengthGraph& strong, std::int6
 
 }  // namespace
 
-SmoothedAggregation::SmoothedAggregation(const Eigen::SparseMatrix<double>& R, const AmgSettings& settings)
-    : settings_(settings), fine_(row_view(R)) {
+BlockMatrix filtered_fine_level(const RegularizationOperator& R, const std::vector<Eigen::Matrix3d>& diagonal, double theta) {
+    const std::int64_t n = R.vertex_count();
+    std::vector<double> diagonal_norm(static_cast<std::size_t>(n));
+    for (std::int64_t i = 0; i < n; ++i) diagonal_norm[std::size_t(i)] = diagonal[std::size_t(i)].norm();
+    const int threads = n >= kParallelMinRows ? omp_get_max_threads() : 1;
+    std::vector<RegularizationOperator::Row> rows;
+    for (int t = 0; t < threads; ++t) rows.emplace_back(n);
+    return build_by_rows(
+        n, n,
+        [&](std::int64_t j, auto&& block) {
+            RegularizationOperator::Row& row = rows[std::size_t(omp_get_thread_num())];
+            R.row(j, row, true);
+            Eigen::Vector3d lumped = Eigen::Vector3d::Zero();
+            for (std::size_t q = 0; q < row.columns.size(); ++q) {
+                const std::int32_t k = row.columns[q];
+                const Eigen::Matrix3d& b = row.blocks[q];
+                // ‖A_jk‖ computed on the block of the lower row, so that the test is symmetric
+                const Eigen::Matrix3d upper = k >= j ? b : Eigen::Matrix3d(b.transpose());
+                const bool strong = k == j || upper.norm() >= theta * std::sqrt(diagonal_norm[std::size_t(j)] * diagonal_norm[std::size_t(k)]);
+                if (strong) block(k) += b;
+                else lumped += b.cwiseAbs().rowwise().sum();
+            }
+            block(std::int32_t(j)).diagonal() += lumped;
+        },
+        [&](std::int64_t) { return std::int64_t(16); });
+}
+
+SmoothedAggregation::SmoothedAggregation(const Eigen::SparseMatrix<double>& R, const AmgSettings& settings) : settings_(settings) {
     if (R.rows() % 3 != 0) throw Error("algebraic multigrid: the matrix is not made of 3x3 blocks");
-    auto level = std::make_unique<Level>();
-    level->nodes = R.rows() / 3;
+    const ScalarRows rows = row_view(R);
+    fine_nonzeros_ = double(R.nonZeros());
+    if (R.rows() / 3 <= settings_.coarsest_nodes) {  // a small system: factor R itself
+        factor_coarsest(R);
+        auto level = std::make_unique<Level>();
+        level->nodes = R.rows() / 3;
+        levels_.push_back(std::move(level));
+        return;
+    }
     // The hierarchy starts from R without its weak blocks (the fairness term's 2-ring): 64 % of
     // R's entries at h = 0.25, and half the setup and V-cycle cost, for 28 instead of 25 iterations.
-    level->op = filtered_blocks(fine_, strong_couplings(fine_, level->nodes, diagonal_blocks(fine_), settings_.strength_threshold));
+    build(filtered_blocks(rows, strong_couplings(rows, R.rows() / 3, diagonal_blocks(rows), settings_.strength_threshold)));
+}
+
+SmoothedAggregation::SmoothedAggregation(BlockMatrix filtered_fine, double fine_nonzeros, const AmgSettings& settings)
+    : settings_(settings), fine_nonzeros_(fine_nonzeros) {
+    build(std::move(filtered_fine));
+}
+
+void SmoothedAggregation::factor_coarsest(const Eigen::SparseMatrix<double>& matrix) {
+    coarsest_ = std::make_unique<Coarsest>();
+    coarsest_->cholesky.compute(matrix);
+    if (coarsest_->cholesky.info() != Eigen::Success)
+        throw Error("algebraic multigrid: the coarsest level is not positive definite (alpha must be > 0)");
+}
+
+void SmoothedAggregation::build(BlockMatrix fine) {
+    auto level = std::make_unique<Level>();
+    level->nodes = fine.rows;
+    level->op = std::move(fine);
     std::vector<double> weight(static_cast<std::size_t>(level->nodes), 1.0);  // translations restricted to the level
     while (true) {
         Level& L = *level;
@@ -264,11 +316,7 @@ SmoothedAggregation::SmoothedAggregation(const Eigen::SparseMatrix<double>& R, c
         levels_.push_back(std::move(level));
         level = std::move(next);
     }
-    coarsest_ = std::make_unique<Coarsest>();
-    if (levels_.empty()) coarsest_->cholesky.compute(R);  // a small system: factor R itself
-    else coarsest_->cholesky.compute(level->op.to_scalar());
-    if (coarsest_->cholesky.info() != Eigen::Success)
-        throw Error("algebraic multigrid: the coarsest level is not positive definite (alpha must be > 0)");
+    factor_coarsest(level->op.to_scalar());
     levels_.push_back(std::move(level));
 }
 
@@ -279,7 +327,7 @@ int SmoothedAggregation::level_count() const { return int(levels_.size()); }
 double SmoothedAggregation::operator_complexity() const {
     double entries = 0;
     for (const auto& L : levels_) entries += 9.0 * double(L->op.block_count());
-    return entries / double(fine_.nonZeros());
+    return entries / fine_nonzeros_;
 }
 
 void SmoothedAggregation::apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const { vcycle(0, r, z); }

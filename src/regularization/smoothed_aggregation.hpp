@@ -35,10 +35,20 @@ struct AmgSettings {
     int max_levels = 16;
 };
 
+class RegularizationOperator;
+
+/// The first level of the hierarchy straight from the operator's block rows (no scalar matrix):
+/// R without its weak blocks (‖R_jk‖_F < θ √(‖R_jj‖_F ‖R_kk‖_F)), each lumped into its row's
+/// diagonal block as diag(Σ_c |R_jk(r, c)|): the same matrix as filtered_blocks of the assembled R.
+BlockMatrix filtered_fine_level(const RegularizationOperator& R, const std::vector<Eigen::Matrix3d>& diagonal, double theta);
+
 class SmoothedAggregation {
 public:
-    /// Builds the hierarchy for R (symmetric, both triangles stored; must outlive this object).
+    /// Builds the hierarchy for R (symmetric, both triangles stored).
     SmoothedAggregation(const Eigen::SparseMatrix<double>& R, const AmgSettings& settings);
+    /// Builds the hierarchy from the fine level R without its weak blocks (filtered_fine_level);
+    /// `fine_nonzeros` (R's scalar entries) is the reference of operator_complexity().
+    SmoothedAggregation(BlockMatrix filtered_fine, double fine_nonzeros, const AmgSettings& settings);
     ~SmoothedAggregation();
     SmoothedAggregation(const SmoothedAggregation&) = delete;
     SmoothedAggregation& operator=(const SmoothedAggregation&) = delete;
@@ -53,11 +63,13 @@ public:
 private:
     struct Level;
     struct Coarsest;
+    void build(BlockMatrix fine);
+    void factor_coarsest(const Eigen::SparseMatrix<double>& matrix);
     void vcycle(std::size_t level, const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
     void smooth(const Level& level, const Eigen::VectorXd& b, Eigen::VectorXd& x, bool zero_guess) const;
 
     AmgSettings settings_;
-    ScalarRows fine_;
+    double fine_nonzeros_ = 0;
     std::vector<std::unique_ptr<Level>> levels_;
     std::unique_ptr<Coarsest> coarsest_;
 };

@@ -12,7 +12,9 @@
 
 #include "conjugate_gradient.hpp"
 #include "dsreg/error.hpp"
+#include "dsreg/progress.hpp"
 #include "smoothed_aggregation.hpp"
+#include "spd_system.hpp"
 
 namespace dsreg {
 
@@ -25,12 +27,6 @@ namespace {
 constexpr Eigen::Index kAutoDirectMaxUnknowns = 1200;
 constexpr double kAutoMinDataWeight = 1e-6;  ///< below this α/diag, amg needs hundreds of iterations
 constexpr int kAutoAmgMaxIterations = 200;   ///< auto falls back to CHOLMOD past this
-
-double residual_norm(const Eigen::SparseMatrix<double>& R, const Eigen::VectorXd& b, const Eigen::VectorXd& x) {
-    Eigen::VectorXd r;
-    detail::multiply_operator(detail::row_view(R), x, r);
-    return (r - b).norm();
-}
 
 std::string format_number(const char* format, double value) {
     char text[64];
@@ -56,8 +52,9 @@ void choose_blas_threads() {
     set(busy ? 1 : cores);
 }
 
-SolveReport solve_cholmod(const Eigen::SparseMatrix<double>& R, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+SolveReport solve_cholmod(const detail::SpdSystem& system, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
     choose_blas_threads();
+    const Eigen::SparseMatrix<double>& R = system.matrix();
     Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
     llt.compute(R);
     if (llt.info() != Eigen::Success)
@@ -70,11 +67,34 @@ SolveReport solve_cholmod(const Eigen::SparseMatrix<double>& R, const Eigen::Vec
     return report;
 }
 
-detail::CgStop stop_rule(const SolverOptions& options, int max_iterations) {
+/// Progress of an iterative solve: the fraction is the share of the way (in log scale) from the
+/// first residual to the one the stop needs; the detail gives the iteration and the error bound.
+std::function<void(int, double, double)> progress_monitor(const SolverOptions& options, const std::string& solver) {
+    if (!options.progress) return {};
+    const bool voxels = options.max_error_voxels > 0 && options.max_error > 0;
+    const double unit = voxels ? options.max_error / options.max_error_voxels : 1.0;
+    const double lambda = options.smallest_eigenvalue;
+    auto first = std::make_shared<double>(0.0);
+    auto shown = std::make_shared<double>(0.0);
+    return [=](int iteration, double residual, double target) {
+        if (iteration == 1 || !(*first > 0)) *first = std::max(residual, target);
+        const double span = std::log(*first / target);
+        const double fraction = span > 0 ? std::clamp(std::log(*first / std::max(residual, target)) / span, 0.0, 1.0) : 1.0;
+        *shown = std::max(*shown, fraction);
+        std::string detail = solver + " iteration " + std::to_string(iteration);
+        if (lambda > 0)
+            detail += ", error bound " + format_number("%.1e", residual / lambda / unit) + (voxels ? " voxel" : "") + " (target " +
+                      format_number("%.0e", target / lambda / unit) + ")";
+        report_progress(options.progress, "solve", *shown, detail);
+    };
+}
+
+detail::CgStop stop_rule(const SolverOptions& options, int max_iterations, const std::string& solver) {
     detail::CgStop stop;
     stop.relative_residual = options.tolerance;
     if (options.max_error > 0 && options.smallest_eigenvalue > 0) stop.absolute_residual = options.max_error * options.smallest_eigenvalue;
     stop.max_iterations = max_iterations;
+    stop.monitor = progress_monitor(options, solver);
     return stop;
 }
 
@@ -85,19 +105,22 @@ Error not_converged(const std::string& solver, const SolverOptions& options, int
     return Error(solver + " did not reach " + target + " in " + std::to_string(iterations) + " iterations; use --solver cholmod");
 }
 
+detail::LinearOperator product(const detail::SpdSystem& system) {
+    return [&system](const Eigen::VectorXd& in, Eigen::VectorXd& out) { system.multiply(in, out); };
+}
+
 /// CG with the inverse 3×3 diagonal blocks of R as preconditioner (block Jacobi).
-SolveReport solve_block_jacobi_cg(const Eigen::SparseMatrix<double>& R, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+SolveReport solve_block_jacobi_cg(const detail::SpdSystem& system, const Eigen::VectorXd& b, Eigen::VectorXd& x,
                                   const SolverOptions& options) {
-    const detail::ScalarRows rows = detail::row_view(R);
-    std::vector<Eigen::Matrix3d> inverse = detail::diagonal_blocks(rows);
+    std::vector<Eigen::Matrix3d> inverse = system.diagonal_blocks();
     for (Eigen::Matrix3d& block : inverse) block = block.inverse().eval();
     const detail::Preconditioner jacobi = [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) {
         z.resize(r.size());
 #pragma omp parallel for schedule(static)
         for (std::int64_t i = 0; i < std::int64_t(inverse.size()); ++i) z.segment<3>(3 * i) = inverse[std::size_t(i)] * r.segment<3>(3 * i);
     };
-    const detail::CgResult cg =
-        detail::preconditioned_conjugate_gradient(rows, b, x, jacobi, stop_rule(options, options.max_iterations));
+    const detail::CgResult cg = detail::preconditioned_conjugate_gradient(
+        product(system), system.infinity_norm(), b, x, jacobi, stop_rule(options, options.max_iterations, "cg"));
     if (!cg.converged) throw not_converged("conjugate gradient", options, cg.iterations);
     SolveReport report;
     report.solver = "cg";
@@ -107,48 +130,29 @@ SolveReport solve_block_jacobi_cg(const Eigen::SparseMatrix<double>& R, const Ei
 
 /// CG preconditioned by one smoothed aggregation V-cycle per iteration. Returns false (x
 /// unspecified) if the tolerance is not met within `max_iterations`.
-bool solve_amg(const Eigen::SparseMatrix<double>& R, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+bool solve_amg(const detail::SpdSystem& system, const Eigen::VectorXd& b, Eigen::VectorXd& x,
                const SolverOptions& options, int max_iterations, SolveReport& report) {
-    const detail::SmoothedAggregation amg(R, detail::AmgSettings{});
-    const detail::Preconditioner vcycle = [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) { amg.apply(r, z); };
-    const detail::CgResult cg =
-        detail::preconditioned_conjugate_gradient(detail::row_view(R), b, x, vcycle, stop_rule(options, max_iterations));
+    const std::unique_ptr<detail::SmoothedAggregation> amg = system.multigrid(detail::AmgSettings{});
+    const detail::Preconditioner vcycle = [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) { amg->apply(r, z); };
+    const detail::CgResult cg = detail::preconditioned_conjugate_gradient(
+        product(system), system.infinity_norm(), b, x, vcycle, stop_rule(options, max_iterations, "amg"));
     report.solver = "amg";
     report.iterations = cg.iterations;
-    report.multigrid_levels = amg.level_count();
-    report.operator_complexity = amg.operator_complexity();
+    report.multigrid_levels = amg->level_count();
+    report.operator_complexity = amg->operator_complexity();
     return cg.converged;
 }
 
-/// min_i (R·t_d)_i / mean_i R_ii, with t_d the translations: for eq. (23) the numerator is
-/// α·min w0 (K annihilates translations), so this is the weight of the data term relative to the
-/// whole diagonal: the smaller it is, the more ill-conditioned R (and the slower any CG).
-double data_weight_ratio(const Eigen::SparseMatrix<double>& R) {
-    const detail::ScalarRows rows = detail::row_view(R);
-    double smallest = std::numeric_limits<double>::infinity(), diagonal = 0;
-#pragma omp parallel for schedule(static) reduction(min : smallest) reduction(+ : diagonal)
-    for (Eigen::Index i = 0; i < rows.rows(); ++i) {
-        double same_coordinate = 0;
-        for (int q = rows.outerIndexPtr()[i]; q < rows.outerIndexPtr()[i + 1]; ++q) {
-            const Eigen::Index j = rows.innerIndexPtr()[q];
-            if (j % 3 == i % 3) same_coordinate += rows.valuePtr()[q];
-            if (j == i) diagonal += rows.valuePtr()[q];
-        }
-        smallest = std::min(smallest, same_coordinate);
-    }
-    return rows.rows() > 0 && diagonal > 0 ? smallest / (diagonal / double(rows.rows())) : 0.0;
-}
-
-SolveReport solve_auto(const Eigen::SparseMatrix<double>& R, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+SolveReport solve_auto(const detail::SpdSystem& system, const Eigen::VectorXd& b, Eigen::VectorXd& x,
                        const SolverOptions& options) {
-    if (R.rows() <= kAutoDirectMaxUnknowns) {
-        SolveReport report = solve_cholmod(R, b, x);
+    if (system.unknowns() <= kAutoDirectMaxUnknowns) {
+        SolveReport report = solve_cholmod(system, b, x);
         report.note = "auto: small system";
         return report;
     }
-    const double ratio = data_weight_ratio(R);
+    const double ratio = system.data_weight_ratio();
     if (ratio < kAutoMinDataWeight) {
-        SolveReport report = solve_cholmod(R, b, x);
+        SolveReport report = solve_cholmod(system, b, x);
         report.note = "auto: data weight " + format_number("%.1e", ratio) + " of the diagonal is too small for amg";
         return report;
     }
@@ -157,7 +161,7 @@ SolveReport solve_auto(const Eigen::SparseMatrix<double>& R, const Eigen::Vector
     const int cap = std::min(options.max_iterations, kAutoAmgMaxIterations);
     std::string why;
     try {
-        if (solve_amg(R, b, x, options, cap, report)) {
+        if (solve_amg(system, b, x, options, cap, report)) {
             report.note = "auto: large system";
             return report;
         }
@@ -166,7 +170,7 @@ SolveReport solve_auto(const Eigen::SparseMatrix<double>& R, const Eigen::Vector
         why = std::string("amg failed (") + e.what() + ")";
     }
     x = guess;
-    report = solve_cholmod(R, b, x);
+    report = solve_cholmod(system, b, x);
     report.note = "auto: " + why;
     return report;
 }
@@ -193,29 +197,40 @@ std::string solver_name(SolverKind kind) {
 
 std::vector<std::string> solver_names() { return {"cholmod", "auto", "amg", "cg"}; }
 
+namespace detail {
+
+SolveReport solve_system(const SpdSystem& system, const Eigen::VectorXd& b, Eigen::VectorXd& x, const SolverOptions& options) {
+    if (system.unknowns() != b.size()) throw Error("solve_spd: inconsistent system sizes");
+    if (x.size() != b.size()) x = Eigen::VectorXd::Zero(b.size());
+    SolveReport report;
+    switch (options.kind) {
+        case SolverKind::Cholmod: report = solve_cholmod(system, b, x); break;
+        case SolverKind::ConjugateGradient: report = solve_block_jacobi_cg(system, b, x, options); break;
+        case SolverKind::Amg:
+            if (!solve_amg(system, b, x, options, options.max_iterations, report))
+                throw not_converged("amg", options, report.iterations);
+            break;
+        case SolverKind::Auto: report = solve_auto(system, b, x, options); break;
+    }
+    Eigen::VectorXd r;
+    system.multiply(x, r);
+    const double norm_r = (r - b).norm(), norm_b = b.norm();
+    report.relative_residual = norm_b > 0 ? norm_r / norm_b : norm_r;
+    report.error_bound = options.smallest_eigenvalue > 0 ? norm_r / options.smallest_eigenvalue : -1.0;
+    return report;
+}
+
+}  // namespace detail
+
 SolveReport solve_spd(const Eigen::SparseMatrix<double>& R, const Eigen::VectorXd& b, Eigen::VectorXd& x,
                       const SolverOptions& options) {
     if (R.rows() != R.cols() || R.rows() != b.size()) throw Error("solve_spd: inconsistent system sizes");
-    if (x.size() != b.size()) x = Eigen::VectorXd::Zero(b.size());
     if (!R.isCompressed()) {  // the iterative solvers read the compressed arrays directly
         Eigen::SparseMatrix<double> compressed = R;
         compressed.makeCompressed();
         return solve_spd(compressed, b, x, options);
     }
-    SolveReport report;
-    switch (options.kind) {
-        case SolverKind::Cholmod: report = solve_cholmod(R, b, x); break;
-        case SolverKind::ConjugateGradient: report = solve_block_jacobi_cg(R, b, x, options); break;
-        case SolverKind::Amg:
-            if (!solve_amg(R, b, x, options, options.max_iterations, report))
-                throw not_converged("amg", options, report.iterations);
-            break;
-        case SolverKind::Auto: report = solve_auto(R, b, x, options); break;
-    }
-    const double norm_r = residual_norm(R, b, x), norm_b = b.norm();
-    report.relative_residual = norm_b > 0 ? norm_r / norm_b : norm_r;
-    report.error_bound = options.smallest_eigenvalue > 0 ? norm_r / options.smallest_eigenvalue : -1.0;
-    return report;
+    return detail::solve_system(detail::AssembledSystem(R), b, x, options);
 }
 
 }  // namespace dsreg

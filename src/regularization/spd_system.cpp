@@ -1,0 +1,58 @@
+#include "spd_system.hpp"
+
+#include <algorithm>
+#include <limits>
+
+#include "conjugate_gradient.hpp"
+
+namespace dsreg::detail {
+
+AssembledSystem::AssembledSystem(const Eigen::SparseMatrix<double>& R)
+    : R_(R), diagonal_(detail::diagonal_blocks(row_view(R))), infinity_norm_(detail::infinity_norm(row_view(R))) {}
+
+void AssembledSystem::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const { multiply_operator(row_view(R_), x, y); }
+
+/// min_i (R·t_d)_i / mean_i R_ii, with t_d the translations: for eq. (23) the numerator is
+/// α·min w0 (K annihilates translations), so this is the weight of the data term relative to the
+/// whole diagonal: the smaller it is, the more ill-conditioned R (and the slower any CG).
+double AssembledSystem::data_weight_ratio() const {
+    const ScalarRows rows = row_view(R_);
+    double smallest = std::numeric_limits<double>::infinity(), diagonal = 0;
+#pragma omp parallel for schedule(static) reduction(min : smallest) reduction(+ : diagonal)
+    for (Eigen::Index i = 0; i < rows.rows(); ++i) {
+        double same_coordinate = 0;
+        for (int q = rows.outerIndexPtr()[i]; q < rows.outerIndexPtr()[i + 1]; ++q) {
+            const Eigen::Index j = rows.innerIndexPtr()[q];
+            if (j % 3 == i % 3) same_coordinate += rows.valuePtr()[q];
+            if (j == i) diagonal += rows.valuePtr()[q];
+        }
+        smallest = std::min(smallest, same_coordinate);
+    }
+    return rows.rows() > 0 && diagonal > 0 ? smallest / (diagonal / double(rows.rows())) : 0.0;
+}
+
+std::unique_ptr<SmoothedAggregation> AssembledSystem::multigrid(const AmgSettings& settings) const {
+    return std::make_unique<SmoothedAggregation>(R_, settings);
+}
+
+OperatorSystem::OperatorSystem(const RegularizationOperator& R, double smallest_data_weight)
+    : R_(R), summary_(R.summary()), smallest_data_weight_(smallest_data_weight) {}
+
+double OperatorSystem::data_weight_ratio() const {
+    return summary_.mean_diagonal > 0 ? smallest_data_weight_ / summary_.mean_diagonal : 0.0;
+}
+
+std::unique_ptr<SmoothedAggregation> OperatorSystem::multigrid(const AmgSettings& settings) const {
+    return std::make_unique<SmoothedAggregation>(filtered_fine_level(R_, summary_.diagonal, settings.strength_threshold),
+                                                 summary_.scalar_nonzeros, settings);
+}
+
+const Eigen::SparseMatrix<double>& OperatorSystem::matrix() const {
+    if (!assembled_) {
+        assembled_.emplace();
+        assemble_matrix(R_, *assembled_);
+    }
+    return *assembled_;
+}
+
+}  // namespace dsreg::detail

@@ -1,0 +1,79 @@
+// dsreg — internal: what the solvers of solvers.cpp need to know of the SPD matrix R of R x = b,
+// whether R is assembled (solve_spd) or applied from the mesh (regularize(): no scalar matrix in
+// memory unless a direct solver needs it).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "block_sparse.hpp"
+#include "dsreg/solvers.hpp"
+#include "regularization_operator.hpp"
+#include "smoothed_aggregation.hpp"
+
+namespace dsreg::detail {
+
+class SpdSystem {
+public:
+    virtual ~SpdSystem() = default;
+    virtual std::int64_t unknowns() const = 0;
+    /// y = R x
+    virtual void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const = 0;
+    /// ‖R‖∞, the largest absolute row sum
+    virtual double infinity_norm() const = 0;
+    /// The 3×3 diagonal blocks of R.
+    virtual const std::vector<Eigen::Matrix3d>& diagonal_blocks() const = 0;
+    /// min_i (R t_d)_i / mean_i R_ii over the translations t_d: the weight of the data term
+    /// relative to the whole diagonal (see solvers.cpp).
+    virtual double data_weight_ratio() const = 0;
+    /// The multigrid hierarchy of R.
+    virtual std::unique_ptr<SmoothedAggregation> multigrid(const AmgSettings& settings) const = 0;
+    /// R assembled (scalar CSR, both triangles), for the direct solver.
+    virtual const Eigen::SparseMatrix<double>& matrix() const = 0;
+};
+
+/// An assembled matrix (which must outlive the system).
+class AssembledSystem : public SpdSystem {
+public:
+    explicit AssembledSystem(const Eigen::SparseMatrix<double>& R);
+    std::int64_t unknowns() const override { return R_.rows(); }
+    void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const override;
+    double infinity_norm() const override { return infinity_norm_; }
+    const std::vector<Eigen::Matrix3d>& diagonal_blocks() const override { return diagonal_; }
+    double data_weight_ratio() const override;
+    std::unique_ptr<SmoothedAggregation> multigrid(const AmgSettings& settings) const override;
+    const Eigen::SparseMatrix<double>& matrix() const override { return R_; }
+
+private:
+    const Eigen::SparseMatrix<double>& R_;
+    std::vector<Eigen::Matrix3d> diagonal_;
+    double infinity_norm_ = 0;
+};
+
+/// R of a mesh, applied matrix-free (the operator must outlive the system).
+/// `smallest_data_weight` is α·min_i α_i w0_i.
+class OperatorSystem : public SpdSystem {
+public:
+    OperatorSystem(const RegularizationOperator& R, double smallest_data_weight);
+    std::int64_t unknowns() const override { return R_.unknowns(); }
+    void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const override { R_.multiply(x, y); }
+    double infinity_norm() const override { return summary_.infinity_norm; }
+    const std::vector<Eigen::Matrix3d>& diagonal_blocks() const override { return summary_.diagonal; }
+    double data_weight_ratio() const override;
+    std::unique_ptr<SmoothedAggregation> multigrid(const AmgSettings& settings) const override;
+    const Eigen::SparseMatrix<double>& matrix() const override;
+
+private:
+    const RegularizationOperator& R_;
+    RegularizationOperator::Summary summary_;
+    double smallest_data_weight_;
+    mutable std::optional<Eigen::SparseMatrix<double>> assembled_;
+};
+
+/// solve_spd() for either kind of system (the report's residual and error bound included).
+SolveReport solve_system(const SpdSystem& system, const Eigen::VectorXd& b, Eigen::VectorXd& x, const SolverOptions& options);
+
+}  // namespace dsreg::detail
