@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "dsreg/error.hpp"
 #include "regularization_operator.hpp"
@@ -137,6 +138,68 @@ StrengthGraph strong_couplings(const Operator& a, std::int64_t n, const std::vec
         s.start[std::size_t(i + 1)] = std::int64_t(s.neighbour.size());
     }
     return s;
+}
+
+/// Directional strength of every off-diagonal block of A: the smallest singular value of
+/// D_i^(-1/2) A_ij D_j^(-1/2) (D the diagonal blocks), i.e. how strongly i and j are coupled in
+/// their weakest direction, relative to each one's own stiffness in that direction. The Frobenius
+/// test of strong_couplings sees the alignment blocks β u uᵀ (strong along u, nothing across) as
+/// strong: across a thin wall, a spike or a noisy fold, two vertices can then share an aggregate
+/// although they move independently along some direction at the cost of the data term only, and
+/// those motions are neither in the coarse space (translations per aggregate) nor reduced by the
+/// smoother. Per block, in the order of a.column; +inf on the diagonal. A is exactly symmetric
+/// (A_ji = A_ijᵀ), and the pair is always computed as in the row of its smaller index, so the
+/// strength of (i, j) and (j, i) are the same number.
+std::vector<float> directional_strengths(const BlockMatrix& a, const std::vector<Eigen::Matrix3d>& diagonal) {
+    const std::int64_t n = a.rows;
+    std::vector<Eigen::Matrix3d> inverse_root(static_cast<std::size_t>(n));
+#pragma omp parallel for schedule(static) if (n >= kParallelMinRows)
+    for (std::int64_t i = 0; i < n; ++i) {
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+        eigen.computeDirect(0.5 * (diagonal[std::size_t(i)] + diagonal[std::size_t(i)].transpose()));
+        const Eigen::Vector3d scale = eigen.eigenvalues().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+        inverse_root[std::size_t(i)] = eigen.eigenvectors() * scale.asDiagonal() * eigen.eigenvectors().transpose();
+    }
+    std::vector<float> strength(a.column.size());
+#pragma omp parallel for schedule(static) if (n >= kParallelMinRows)
+    for (std::int64_t i = 0; i < n; ++i)
+        for (std::int64_t q = a.start[std::size_t(i)]; q < a.start[std::size_t(i + 1)]; ++q) {
+            const std::int32_t j = a.column[std::size_t(q)];
+            if (j == i) {
+                strength[std::size_t(q)] = std::numeric_limits<float>::infinity();
+                continue;
+            }
+            const std::int64_t low = std::min<std::int64_t>(i, j), high = std::max<std::int64_t>(i, j);
+            const Eigen::Matrix3d block = i < j ? a.block[std::size_t(q)] : Eigen::Matrix3d(a.block[std::size_t(q)].transpose());
+            const Eigen::Matrix3d m = inverse_root[std::size_t(low)] * block * inverse_root[std::size_t(high)];
+            Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+            eigen.computeDirect(m.transpose() * m, Eigen::EigenvaluesOnly);
+            strength[std::size_t(q)] = float(std::sqrt(std::max(0.0, eigen.eigenvalues()[0])));
+        }
+    return strength;
+}
+
+/// The graph of the off-diagonal blocks of directional strength ≥ θ (symmetric: see above).
+StrengthGraph directional_graph(const BlockMatrix& a, const std::vector<float>& strength, double theta) {
+    const std::int64_t n = a.rows;
+    StrengthGraph g;
+    g.start.assign(std::size_t(n + 1), 0);
+    const auto strong = [&](std::int64_t i, std::int64_t q) { return a.column[std::size_t(q)] != i && strength[std::size_t(q)] >= theta; };
+#pragma omp parallel for schedule(static) if (n >= kParallelMinRows)
+    for (std::int64_t i = 0; i < n; ++i) {
+        std::int64_t count = 0;
+        for (std::int64_t q = a.start[std::size_t(i)]; q < a.start[std::size_t(i + 1)]; ++q) count += strong(i, q) ? 1 : 0;
+        g.start[std::size_t(i + 1)] = count;
+    }
+    for (std::int64_t i = 0; i < n; ++i) g.start[std::size_t(i + 1)] += g.start[std::size_t(i)];
+    g.neighbour.resize(std::size_t(g.start.back()));
+#pragma omp parallel for schedule(static) if (n >= kParallelMinRows)
+    for (std::int64_t i = 0; i < n; ++i) {
+        std::int64_t out = g.start[std::size_t(i)];
+        for (std::int64_t q = a.start[std::size_t(i)]; q < a.start[std::size_t(i + 1)]; ++q)
+            if (strong(i, q)) g.neighbour[std::size_t(out++)] = a.column[std::size_t(q)];
+    }
+    return g;
 }
 
 /// (A + Aᵀ)/2 in place for a block matrix with a symmetric pattern: the Galerkin product PᵀAP is
@@ -280,6 +343,22 @@ void SmoothedAggregation::factor_coarsest(const Eigen::SparseMatrix<double>& mat
         throw Error("algebraic multigrid: the coarsest level is not positive definite (alpha must be > 0)");
 }
 
+/// Aggregates of a level on the directional graph, its threshold halved while the aggregates are
+/// too many (a level whose couplings are weak in some direction almost everywhere, e.g. with the
+/// trivial normals of a staircase), and on the graph of strong blocks as the last resort.
+std::vector<std::int32_t> SmoothedAggregation::aggregate_level(const BlockMatrix& a, const std::vector<Eigen::Matrix3d>& diagonal,
+                                                               const StrengthGraph& strong, std::int64_t& count) const {
+    if (settings_.directional_threshold > 0) {
+        const std::vector<float> strength = directional_strengths(a, diagonal);
+        double theta = settings_.directional_threshold;
+        for (int attempt = 0; attempt < 5; ++attempt, theta /= 2) {
+            std::vector<std::int32_t> aggregate = aggregate_nodes(directional_graph(a, strength, theta), a.rows, count);
+            if (double(count) * settings_.minimum_coarsening <= double(a.rows)) return aggregate;
+        }
+    }
+    return aggregate_nodes(strong, a.rows, count);
+}
+
 void SmoothedAggregation::build(BlockMatrix fine) {
     auto level = std::make_unique<Level>();
     level->nodes = fine.rows;
@@ -296,7 +375,7 @@ void SmoothedAggregation::build(BlockMatrix fine) {
 
         const StrengthGraph strong = strong_couplings(L.op, L.nodes, diagonal, settings_.strength_threshold);
         std::int64_t aggregates = 0;
-        const std::vector<std::int32_t> aggregate = aggregate_nodes(strong, L.nodes, aggregates);
+        const std::vector<std::int32_t> aggregate = aggregate_level(L.op, diagonal, strong, aggregates);
         if (aggregates > L.nodes * 4 / 5) break;  // no real coarsening left: factor this level
 
         // T(i, a) = weight_i / ‖weight on a‖ · I3 (orthonormal columns); the coarse weights are the norms.

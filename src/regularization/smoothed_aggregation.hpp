@@ -23,6 +23,13 @@ namespace dsreg::detail {
 
 struct AmgSettings {
     double strength_threshold = 0.08;  ///< block (i,j) is strong if ‖A_ij‖ ≥ θ √(‖A_ii‖ ‖A_jj‖)
+    /// Aggregation joins i and j only if they are coupled in every direction: the smallest
+    /// singular value of D_i^(-1/2) A_ij D_j^(-1/2) is at least this (see aggregation_graph).
+    /// 0: aggregate on the graph of strength_threshold.
+    double directional_threshold = 0.04;
+    /// If the directional graph leaves more than nodes / this aggregates, its threshold is halved
+    /// (at most 4 times), then the graph of strength_threshold is used.
+    double minimum_coarsening = 4;
     int smoothing_degree = 2;          ///< Chebyshev degree of pre- and post-smoothing
     double smoothing_range = 30;       ///< Chebyshev targets [λmax/range, λmax] of D⁻¹A
     /// The Chebyshev interval ends at this × the Lanczos estimate of λmax(D⁻¹A). The estimate
@@ -64,6 +71,8 @@ private:
     struct Level;
     struct Coarsest;
     void build(BlockMatrix fine);
+    std::vector<std::int32_t> aggregate_level(const BlockMatrix& a, const std::vector<Eigen::Matrix3d>& diagonal,
+                                              const StrengthGraph& strong, std::int64_t& count) const;
     void factor_coarsest(const Eigen::SparseMatrix<double>& matrix);
     void vcycle(std::size_t level, const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
     void smooth(const Level& level, const Eigen::VectorXd& b, Eigen::VectorXd& x, bool zero_guess) const;
