@@ -119,7 +119,7 @@ TEST(RegularizationOperator, SummaryAndFineLevelEqualThoseOfTheAssembledMatrix) 
 
         // The multigrid fine level: R without its weak blocks, built from either form.
         const double theta = detail::AmgSettings{}.strength_threshold;
-        const Eigen::SparseMatrix<double> from_operator = detail::filtered_fine_level(R, summary.diagonal, theta).to_scalar();
+        const Eigen::SparseMatrix<double> from_operator = detail::filtered_fine_level<double>(R, summary.diagonal, theta).to_scalar();
         Eigen::SparseMatrix<double> from_matrix = detail::filtered_blocks(rows, [&] {
             // the strong graph of R as solve_spd's hierarchy builds it: block norms against the threshold
             detail::StrengthGraph g;

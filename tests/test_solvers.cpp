@@ -205,18 +205,22 @@ TEST(Solvers, AmgPreconditionerIsSymmetricPositiveDefinite) {
     // (to rounding), on every problem, tiny α included.
     std::mt19937 rng(7);
     std::normal_distribution<double> normal;
+    // Both precisions of the hierarchy (the blocks stored in float or double, computed in double).
     for (const Problem& p : problems()) {
-        const detail::SmoothedAggregation amg(p.system.matrix, detail::AmgSettings{});
+        const std::unique_ptr<detail::Multigrid> hierarchies[] = {
+            std::make_unique<detail::SmoothedAggregation<double>>(p.system.matrix, detail::AmgSettings{}),
+            std::make_unique<detail::SmoothedAggregation<float>>(p.system.matrix, detail::AmgSettings{})};
         const Eigen::Index n = p.system.matrix.rows();
-        for (int trial = 0; trial < 3; ++trial) {
-            const Eigen::VectorXd x = Eigen::VectorXd::NullaryExpr(n, [&] { return normal(rng); });
-            const Eigen::VectorXd y = Eigen::VectorXd::NullaryExpr(n, [&] { return normal(rng); });
-            Eigen::VectorXd mx, my;
-            amg.apply(x, mx);
-            amg.apply(y, my);
-            EXPECT_NEAR(y.dot(mx), x.dot(my), 1e-9 * std::sqrt(x.dot(mx) * y.dot(my))) << p.name;
-            EXPECT_GT(x.dot(mx), 0) << p.name;
-        }
+        for (const auto& amg : hierarchies)
+            for (int trial = 0; trial < 3; ++trial) {
+                const Eigen::VectorXd x = Eigen::VectorXd::NullaryExpr(n, [&] { return normal(rng); });
+                const Eigen::VectorXd y = Eigen::VectorXd::NullaryExpr(n, [&] { return normal(rng); });
+                Eigen::VectorXd mx, my;
+                amg->apply(x, mx);
+                amg->apply(y, my);
+                EXPECT_NEAR(y.dot(mx), x.dot(my), 1e-9 * std::sqrt(x.dot(mx) * y.dot(my))) << p.name;
+                EXPECT_GT(x.dot(mx), 0) << p.name;
+            }
     }
 }
 

@@ -41,32 +41,35 @@ ScalarRows row_view(const Eigen::SparseMatrix<double>& s) {
     return ScalarRows(s.rows(), s.cols(), s.nonZeros(), s.outerIndexPtr(), s.innerIndexPtr(), s.valuePtr());
 }
 
-void BlockMatrix::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+template <class Scalar>
+void BlockMatrixT<Scalar>::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
     y.resize(3 * rows);
 #pragma omp parallel for schedule(static) if (rows >= kParallelMinRows)
     for (std::int64_t i = 0; i < rows; ++i) {
         Eigen::Vector3d sum = Eigen::Vector3d::Zero();
         for (std::int64_t q = start[std::size_t(i)]; q < start[std::size_t(i + 1)]; ++q)
-            sum.noalias() += block[std::size_t(q)] * x.segment<3>(3 * std::int64_t(column[std::size_t(q)]));
+            sum.noalias() += block[std::size_t(q)].template cast<double>() * x.segment<3>(3 * std::int64_t(column[std::size_t(q)]));
         y.segment<3>(3 * i) = sum;
     }
 }
 
-Eigen::SparseMatrix<double> BlockMatrix::to_scalar() const {
+template <class Scalar>
+Eigen::SparseMatrix<double> BlockMatrixT<Scalar>::to_scalar() const {
     std::vector<Eigen::Triplet<double>> entries;
     entries.reserve(9 * column.size());
     for (std::int64_t i = 0; i < rows; ++i)
         for (std::int64_t q = start[std::size_t(i)]; q < start[std::size_t(i + 1)]; ++q)
             for (int r = 0; r < 3; ++r)
                 for (int c = 0; c < 3; ++c)
-                    entries.emplace_back(3 * i + r, 3 * std::int64_t(column[std::size_t(q)]) + c, block[std::size_t(q)](r, c));
+                    entries.emplace_back(3 * i + r, 3 * std::int64_t(column[std::size_t(q)]) + c, double(block[std::size_t(q)](r, c)));
     Eigen::SparseMatrix<double> s(3 * rows, 3 * cols);
     s.setFromTriplets(entries.begin(), entries.end());
     return s;
 }
 
-BlockMatrix transpose(const BlockMatrix& a) {
-    BlockMatrix t;
+template <class Scalar>
+BlockMatrixT<Scalar> transpose(const BlockMatrixT<Scalar>& a) {
+    BlockMatrixT<Scalar> t;
     t.rows = a.cols;
     t.cols = a.rows;
     t.start.assign(std::size_t(t.rows + 1), 0);
@@ -84,15 +87,16 @@ BlockMatrix transpose(const BlockMatrix& a) {
     return t;
 }
 
-BlockMatrix multiply(const BlockMatrix& a, const BlockMatrix& b) {
-    return build_by_rows(
+template <class Scalar>
+BlockMatrixT<Scalar> multiply(const BlockMatrixT<Scalar>& a, const BlockMatrixT<Scalar>& b) {
+    return build_by_rows<Scalar>(
         a.rows, b.cols,
         [&](std::int64_t i, auto&& block) {
             for (std::int64_t p = a.start[std::size_t(i)]; p < a.start[std::size_t(i + 1)]; ++p) {
-                const Eigen::Matrix3d& left = a.block[std::size_t(p)];
+                const Eigen::Matrix3d left = a.block_at(p);
                 const std::int64_t k = a.column[std::size_t(p)];
                 for (std::int64_t q = b.start[std::size_t(k)]; q < b.start[std::size_t(k + 1)]; ++q)
-                    block(b.column[std::size_t(q)]).noalias() += left * b.block[std::size_t(q)];
+                    block(b.column[std::size_t(q)]).noalias() += left * b.block_at(q);
             }
         },
         [&](std::int64_t i) {
@@ -109,49 +113,51 @@ namespace {
 
 /// Rows of P: block (i, a) = −ω D_i⁻¹ (A_F T)(i, a), plus weight_i·I3 on the aggregate of i.
 /// `visit_row(i, add)` calls add(j, A_ij) for every block of row i, as a 3×3 matrix expression.
-template <class VisitRow>
-BlockMatrix build_prolongator(std::int64_t n, const std::vector<Eigen::Matrix3d>& inverse_diagonal, const StrengthGraph& strong,
-                              const std::vector<std::int32_t>& aggregate, const std::vector<double>& weight,
-                              std::int64_t aggregate_count, double omega, VisitRow visit_row) {
-    BlockMatrix p = build_by_rows(
+template <class Scalar, class VisitRow>
+BlockMatrixT<Scalar> build_prolongator(std::int64_t n, const std::vector<Eigen::Matrix3d>& inverse_diagonal, const StrengthGraph& strong,
+                                       const std::vector<std::int32_t>& aggregate, const std::vector<double>& weight,
+                                       std::int64_t aggregate_count, double omega, VisitRow visit_row) {
+    // P's rows: (A_F T)(i, ·) accumulated in double, then −ω D_i⁻¹ times it plus weight_i·I3 on
+    // the aggregate of i, before the blocks are rounded to Scalar.
+    return build_by_rows<Scalar>(
         n, aggregate_count,
         [&](std::int64_t i, auto&& block) {
             const std::int32_t own = aggregate[std::size_t(i)];
             block(own);  // the aggregate of i is always present
             const auto first = strong.neighbour.begin() + strong.start[std::size_t(i)];
             const auto last = strong.neighbour.begin() + strong.start[std::size_t(i + 1)];
-            visit_row(i, [&](std::int64_t j, const auto& a_ij) {
+            visit_row(i, [&](std::int64_t j, const Eigen::Matrix3d& a_ij) {
                 if (j == i || std::find(first, last, std::int32_t(j)) != last)
                     block(aggregate[std::size_t(j)]) += weight[std::size_t(j)] * a_ij;
                 else  // weak: lumped into the diagonal block of A_F
                     block(own) += weight[std::size_t(i)] * a_ij;
             });
         },
-        [&](std::int64_t i) { return 1 + strong.start[std::size_t(i + 1)] - strong.start[std::size_t(i)]; });
-#pragma omp parallel for schedule(static) if (n >= kParallelMinRows)
-    for (std::int64_t i = 0; i < n; ++i)
-        for (std::int64_t q = p.start[std::size_t(i)]; q < p.start[std::size_t(i + 1)]; ++q) {
-            Eigen::Matrix3d& b = p.block[std::size_t(q)];
-            b = (-omega * inverse_diagonal[std::size_t(i)] * b).eval();
-            if (p.column[std::size_t(q)] == aggregate[std::size_t(i)]) b.diagonal().array() += weight[std::size_t(i)];
-        }
-    return p;
+        [&](std::int64_t i) { return 1 + strong.start[std::size_t(i + 1)] - strong.start[std::size_t(i)]; },
+        [&](std::int64_t i, const std::int32_t* columns, Eigen::Matrix3d* blocks, std::size_t count) {
+            for (std::size_t q = 0; q < count; ++q) {
+                blocks[q] = (-omega * inverse_diagonal[std::size_t(i)] * blocks[q]).eval();
+                if (columns[q] == aggregate[std::size_t(i)]) blocks[q].diagonal().array() += weight[std::size_t(i)];
+            }
+        });
 }
 
 }  // namespace
 
-BlockMatrix smoothed_prolongator(const BlockMatrix& a, const std::vector<Eigen::Matrix3d>& inverse_diagonal,
-                                 const StrengthGraph& strong, const std::vector<std::int32_t>& aggregate,
-                                 const std::vector<double>& weight, std::int64_t aggregate_count, double omega) {
-    return build_prolongator(a.rows, inverse_diagonal, strong, aggregate, weight, aggregate_count, omega,
-                             [&](std::int64_t i, auto&& add) {
-                                 for (std::int64_t q = a.start[std::size_t(i)]; q < a.start[std::size_t(i + 1)]; ++q)
-                                     add(a.column[std::size_t(q)], a.block[std::size_t(q)]);
-                             });
+template <class Scalar>
+BlockMatrixT<Scalar> smoothed_prolongator(const BlockMatrixT<Scalar>& a, const std::vector<Eigen::Matrix3d>& inverse_diagonal,
+                                          const StrengthGraph& strong, const std::vector<std::int32_t>& aggregate,
+                                          const std::vector<double>& weight, std::int64_t aggregate_count, double omega) {
+    return build_prolongator<Scalar>(a.rows, inverse_diagonal, strong, aggregate, weight, aggregate_count, omega,
+                                     [&](std::int64_t i, auto&& add) {
+                                         for (std::int64_t q = a.start[std::size_t(i)]; q < a.start[std::size_t(i + 1)]; ++q)
+                                             add(a.column[std::size_t(q)], a.block_at(q));
+                                     });
 }
 
-BlockMatrix filtered_blocks(const ScalarRows& a, const StrengthGraph& strong) {
-    return build_by_rows(
+template <class Scalar>
+BlockMatrixT<Scalar> filtered_blocks(const ScalarRows& a, const StrengthGraph& strong) {
+    return build_by_rows<Scalar>(
         a.rows() / 3, a.rows() / 3,
         [&](std::int64_t i, auto&& block) {
             const auto first = strong.neighbour.begin() + strong.start[std::size_t(i)];
@@ -180,12 +186,13 @@ std::vector<Eigen::Matrix3d> diagonal_blocks(const ScalarRows& a) {
     return d;
 }
 
-std::vector<Eigen::Matrix3d> diagonal_blocks(const BlockMatrix& a) {
+template <class Scalar>
+std::vector<Eigen::Matrix3d> diagonal_blocks(const BlockMatrixT<Scalar>& a) {
     std::vector<Eigen::Matrix3d> d(static_cast<std::size_t>(a.rows), Eigen::Matrix3d::Zero());
 #pragma omp parallel for schedule(static) if (a.rows >= kParallelMinRows)
     for (std::int64_t i = 0; i < a.rows; ++i)
         for (std::int64_t q = a.start[std::size_t(i)]; q < a.start[std::size_t(i + 1)]; ++q)
-            if (a.column[std::size_t(q)] == i) d[std::size_t(i)] += a.block[std::size_t(q)];
+            if (a.column[std::size_t(q)] == i) d[std::size_t(i)] += a.block_at(q);
     return d;
 }
 
@@ -203,15 +210,31 @@ void block_row_norms(const ScalarRows& a, std::int64_t i, std::vector<double>& s
     finish_norms(scratch, i, out);
 }
 
-void block_row_norms(const BlockMatrix& a, std::int64_t i, std::vector<double>& scratch, BlockRowNorms& out) {
+template <class Scalar>
+void block_row_norms(const BlockMatrixT<Scalar>& a, std::int64_t i, std::vector<double>& scratch, BlockRowNorms& out) {
     out.neighbor.clear();
     for (std::int64_t q = a.start[std::size_t(i)]; q < a.start[std::size_t(i + 1)]; ++q) {
         const std::int32_t j = a.column[std::size_t(q)];
         if (scratch[std::size_t(j)] == 0) out.neighbor.push_back(j);
-        scratch[std::size_t(j)] += a.block[std::size_t(q)].squaredNorm() + 1e-300;
+        scratch[std::size_t(j)] += a.block_at(q).squaredNorm() + 1e-300;
     }
     out.norm.resize(out.neighbor.size());
     finish_norms(scratch, i, out);
 }
+
+// The two precisions of the multigrid hierarchy.
+#define DSREG_BLOCK_SPARSE_INSTANTIATE(Scalar)                                                                           \
+    template struct BlockMatrixT<Scalar>;                                                                                \
+    template BlockMatrixT<Scalar> transpose(const BlockMatrixT<Scalar>&);                                               \
+    template BlockMatrixT<Scalar> multiply(const BlockMatrixT<Scalar>&, const BlockMatrixT<Scalar>&);                   \
+    template BlockMatrixT<Scalar> smoothed_prolongator(const BlockMatrixT<Scalar>&, const std::vector<Eigen::Matrix3d>&, \
+                                                       const StrengthGraph&, const std::vector<std::int32_t>&,          \
+                                                       const std::vector<double>&, std::int64_t, double);               \
+    template BlockMatrixT<Scalar> filtered_blocks(const ScalarRows&, const StrengthGraph&);                              \
+    template std::vector<Eigen::Matrix3d> diagonal_blocks(const BlockMatrixT<Scalar>&);                                 \
+    template void block_row_norms(const BlockMatrixT<Scalar>&, std::int64_t, std::vector<double>&, BlockRowNorms&);
+DSREG_BLOCK_SPARSE_INSTANTIATE(double)
+DSREG_BLOCK_SPARSE_INSTANTIATE(float)
+#undef DSREG_BLOCK_SPARSE_INSTANTIATE
 
 }  // namespace dsreg::detail

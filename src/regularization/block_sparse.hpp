@@ -24,30 +24,39 @@ ScalarRows row_view(const Eigen::SparseMatrix<double>& symmetric);
 
 /// Block compressed sparse rows: block (i, column[q]) = block[q] for q in [start[i], start[i+1]).
 /// Columns are not sorted within a block row (they come in the order the products find them).
-struct BlockMatrix {
+/// The blocks are stored in `Scalar` (double, or float for the multigrid hierarchy: half the
+/// memory and memory traffic); every computation on them is made in double.
+template <class Scalar>
+struct BlockMatrixT {
+    using Block = Eigen::Matrix<Scalar, 3, 3>;
     std::int64_t rows = 0;  ///< block rows (nodes)
     std::int64_t cols = 0;  ///< block columns
     std::vector<std::int64_t> start{0};
     std::vector<std::int32_t> column;
-    std::vector<Eigen::Matrix3d> block;
+    std::vector<Block> block;
 
     std::int64_t block_count() const { return std::int64_t(column.size()); }
+    Eigen::Matrix3d block_at(std::int64_t q) const { return block[std::size_t(q)].template cast<double>(); }
     /// y = A x (parallel over block rows).
     void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
     /// The same matrix as scalar column-major CSC (for CHOLMOD on the coarsest level).
     Eigen::SparseMatrix<double> to_scalar() const;
 };
+using BlockMatrix = BlockMatrixT<double>;
 
 /// Builds a block matrix row by row in parallel (Gustavson): `fill_row(i, block)` adds into
-/// `block(j)`, a zero-initialized 3×3 accumulator for column j of row i; `row_bound(i)` is an upper
-/// bound on the blocks of row i. Each thread fills a contiguous range of rows into a piece reserved
-/// from the bounds (no reallocation: memory is touched once), then copies it into place.
-template <class FillRow, class RowBound>
-BlockMatrix build_by_rows(std::int64_t rows, std::int64_t cols, FillRow fill_row, RowBound row_bound) {
+/// `block(j)`, a zero-initialized 3×3 double accumulator for column j of row i; `row_bound(i)` is
+/// an upper bound on the blocks of row i. Each thread fills a contiguous range of rows into a
+/// piece reserved from the bounds (no reallocation: memory is touched once), then copies it into
+/// place. When a row is complete, `finish_row(i, columns, blocks, count)` may still change its
+/// accumulators; then they are rounded to Scalar.
+template <class Scalar, class FillRow, class RowBound, class FinishRow>
+BlockMatrixT<Scalar> build_by_rows(std::int64_t rows, std::int64_t cols, FillRow fill_row, RowBound row_bound, FinishRow finish_row) {
+    using Block = typename BlockMatrixT<Scalar>::Block;
     const int threads = rows >= kParallelMinRows ? omp_get_max_threads() : 1;
     std::vector<std::int64_t> row_count(static_cast<std::size_t>(rows), 0);
     std::vector<std::int64_t> piece_first(static_cast<std::size_t>(threads) + 1, 0);
-    BlockMatrix out;
+    BlockMatrixT<Scalar> out;
     out.rows = rows;
     out.cols = cols;
     out.start.assign(std::size_t(rows + 1), 0);
@@ -59,22 +68,26 @@ BlockMatrix build_by_rows(std::int64_t rows, std::int64_t cols, FillRow fill_row
         std::int64_t bound = 0;
         for (std::int64_t i = first; i < last; ++i) bound += std::min<std::int64_t>(row_bound(i), cols);
         std::vector<std::int32_t> columns;
-        std::vector<Eigen::Matrix3d> blocks;
+        std::vector<Block> blocks;
+        std::vector<Eigen::Matrix3d> row;  // the accumulators of the current row
         columns.reserve(std::size_t(bound));
         blocks.reserve(std::size_t(bound));
         for (std::int64_t i = first; i < last; ++i) {
             const std::size_t row_begin = columns.size();
+            row.clear();
             const auto block = [&](std::int32_t j) -> Eigen::Matrix3d& {
                 std::int32_t& s = slot[std::size_t(j)];
                 if (s < 0) {
-                    s = std::int32_t(columns.size() - row_begin);
+                    s = std::int32_t(row.size());
                     columns.push_back(j);
-                    blocks.push_back(Eigen::Matrix3d::Zero());
+                    row.push_back(Eigen::Matrix3d::Zero());
                 }
-                return blocks[row_begin + std::size_t(s)];
+                return row[std::size_t(s)];
             };
             fill_row(i, block);
+            finish_row(i, columns.data() + row_begin, row.data(), row.size());
             for (std::size_t q = row_begin; q < columns.size(); ++q) slot[std::size_t(columns[q])] = -1;
+            for (const Eigen::Matrix3d& b : row) blocks.push_back(b.cast<Scalar>());
             row_count[std::size_t(i)] = std::int64_t(columns.size() - row_begin);
         }
         piece_first[std::size_t(t) + 1] = std::int64_t(columns.size());
@@ -92,10 +105,30 @@ BlockMatrix build_by_rows(std::int64_t rows, std::int64_t cols, FillRow fill_row
     return out;
 }
 
-BlockMatrix transpose(const BlockMatrix& a);
+template <class Scalar, class FillRow, class RowBound>
+BlockMatrixT<Scalar> build_by_rows(std::int64_t rows, std::int64_t cols, FillRow fill_row, RowBound row_bound) {
+    return build_by_rows<Scalar>(rows, cols, fill_row, row_bound, [](std::int64_t, const std::int32_t*, Eigen::Matrix3d*, std::size_t) {});
+}
 
-/// A·B for block matrices.
-BlockMatrix multiply(const BlockMatrix& a, const BlockMatrix& b);
+template <class Scalar>
+BlockMatrixT<Scalar> transpose(const BlockMatrixT<Scalar>& a);
+
+/// A·B for block matrices (accumulated in double, stored in the precision of A).
+template <class Scalar>
+BlockMatrixT<Scalar> multiply(const BlockMatrixT<Scalar>& a, const BlockMatrixT<Scalar>& b);
+
+/// A copy with the blocks rounded to another precision.
+template <class To, class From>
+BlockMatrixT<To> convert(const BlockMatrixT<From>& a) {
+    BlockMatrixT<To> out;
+    out.rows = a.rows;
+    out.cols = a.cols;
+    out.start = a.start;
+    out.column = a.column;
+    out.block.resize(a.block.size());
+    for (std::size_t q = 0; q < a.block.size(); ++q) out.block[q] = a.block[q].template cast<To>();
+    return out;
+}
 
 /// Node graph of the strong couplings: the strong neighbours of i are
 /// neighbour[start[i]] … neighbour[start[i+1] − 1].
@@ -110,23 +143,27 @@ struct StrengthGraph {
 /// of A, and A_F = A without its weak blocks, each added to the diagonal block of its row (so
 /// A_F and A agree on translations; Vaněk, Mandel, Brezina 1996, §4). Dropping the weak blocks
 /// keeps P, and so the coarse operators, sparse.
-BlockMatrix smoothed_prolongator(const BlockMatrix& a, const std::vector<Eigen::Matrix3d>& inverse_diagonal,
-                                 const StrengthGraph& strong, const std::vector<std::int32_t>& aggregate,
-                                 const std::vector<double>& weight, std::int64_t aggregate_count, double omega);
+template <class Scalar>
+BlockMatrixT<Scalar> smoothed_prolongator(const BlockMatrixT<Scalar>& a, const std::vector<Eigen::Matrix3d>& inverse_diagonal,
+                                          const StrengthGraph& strong, const std::vector<std::int32_t>& aggregate,
+                                          const std::vector<double>& weight, std::int64_t aggregate_count, double omega);
 
 /// A_F: the diagonal blocks and the strong blocks of the scalar matrix A, as a block matrix. Each
 /// weak block W_ij is dropped and diag(Σ_c |W_ij(r, c)|) added to the diagonal block instead,
 /// which keeps A_F ⪰ A (so positive definite) and, for the weak blocks w·I3 with w > 0 of the
 /// fairness term's 2-ring, gives A_F t = A t on translations t.
-BlockMatrix filtered_blocks(const ScalarRows& a, const StrengthGraph& strong);
+template <class Scalar = double>
+BlockMatrixT<Scalar> filtered_blocks(const ScalarRows& a, const StrengthGraph& strong);
 
 /// Diagonal 3×3 blocks of A (one per node).
 std::vector<Eigen::Matrix3d> diagonal_blocks(const ScalarRows& a);
-std::vector<Eigen::Matrix3d> diagonal_blocks(const BlockMatrix& a);
+template <class Scalar>
+std::vector<Eigen::Matrix3d> diagonal_blocks(const BlockMatrixT<Scalar>& a);
 
 /// y = A x for either kind of level (parallel over rows).
 void multiply_operator(const ScalarRows& a, const Eigen::VectorXd& x, Eigen::VectorXd& y);
-inline void multiply_operator(const BlockMatrix& a, const Eigen::VectorXd& x, Eigen::VectorXd& y) { a.multiply(x, y); }
+template <class Scalar>
+void multiply_operator(const BlockMatrixT<Scalar>& a, const Eigen::VectorXd& x, Eigen::VectorXd& y) { a.multiply(x, y); }
 
 /// Frobenius norms of the off-diagonal blocks of node row i, visited as (j, ‖A_ij‖_F); the
 /// diagonal block norm goes to `diagonal`. `scratch` is n zeros on entry and on exit.
@@ -136,6 +173,7 @@ struct BlockRowNorms {
     double diagonal = 0;
 };
 void block_row_norms(const ScalarRows& a, std::int64_t i, std::vector<double>& scratch, BlockRowNorms& out);
-void block_row_norms(const BlockMatrix& a, std::int64_t i, std::vector<double>& scratch, BlockRowNorms& out);
+template <class Scalar>
+void block_row_norms(const BlockMatrixT<Scalar>& a, std::int64_t i, std::vector<double>& scratch, BlockRowNorms& out);
 
 }  // namespace dsreg::detail

@@ -13,17 +13,19 @@
 
 namespace dsreg::detail {
 
-struct SmoothedAggregation::Level {
-    BlockMatrix op;  ///< level 0: R without its weak blocks (filtered_blocks); then Pᵀ A P
+template <class Scalar>
+struct SmoothedAggregation<Scalar>::Level {
+    Matrix op;  ///< level 0: R without its weak blocks (filtered_blocks); then Pᵀ A P
     std::int64_t nodes = 0;
-    std::vector<Eigen::Matrix3d> inverse_diagonal;
+    std::vector<typename Matrix::Block> inverse_diagonal;
     double lambda_max = 0;  ///< upper estimate of the largest eigenvalue of D⁻¹A (Lanczos)
-    BlockMatrix prolongator;   ///< P: next coarser level → this level
-    BlockMatrix restriction;   ///< Pᵀ
+    Matrix prolongator;     ///< P: next coarser level → this level
+    Matrix restriction;     ///< Pᵀ
     mutable Eigen::VectorXd residual, direction, preconditioned, coarse_rhs, coarse_solution;
 };
 
-struct SmoothedAggregation::Coarsest {
+template <class Scalar>
+struct SmoothedAggregation<Scalar>::Coarsest {
     Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> cholesky;
 };
 
@@ -38,17 +40,20 @@ std::vector<Eigen::Matrix3d> inverted(const std::vector<Eigen::Matrix3d>& blocks
     return inverse;
 }
 
-void apply_block_diagonal(const std::vector<Eigen::Matrix3d>& blocks, const Eigen::VectorXd& x, Eigen::VectorXd& y) {
+template <class Block>
+void apply_block_diagonal(const std::vector<Block>& blocks, const Eigen::VectorXd& x, Eigen::VectorXd& y) {
     y.resize(x.size());
 #pragma omp parallel for schedule(static) if (std::int64_t(blocks.size()) >= kParallelMinRows)
-    for (std::int64_t i = 0; i < std::int64_t(blocks.size()); ++i) y.segment<3>(3 * i) = blocks[std::size_t(i)] * x.segment<3>(3 * i);
+    for (std::int64_t i = 0; i < std::int64_t(blocks.size()); ++i)
+        y.segment<3>(3 * i) = blocks[std::size_t(i)].template cast<double>() * x.segment<3>(3 * i);
 }
 
 /// Upper estimate of λmax(D⁻¹A) by k steps of Lanczos in the D inner product (D⁻¹A is
 /// self-adjoint there): the largest Ritz value θ plus the last off-diagonal β_k, which bounds the
 /// distance from θ to the spectrum. Power iteration underestimates λmax, and a Chebyshev
 /// smoother whose interval misses the top of the spectrum makes the V-cycle indefinite.
-double largest_eigenvalue_bound(const BlockMatrix& a, const std::vector<Eigen::Matrix3d>& diagonal,
+template <class Scalar>
+double largest_eigenvalue_bound(const BlockMatrixT<Scalar>& a, const std::vector<Eigen::Matrix3d>& diagonal,
                                 const std::vector<Eigen::Matrix3d>& inverse_diagonal, int steps) {
     const auto d_norm = [&](const Eigen::VectorXd& v, Eigen::VectorXd& dv) {
         apply_block_diagonal(diagonal, v, dv);
@@ -150,7 +155,8 @@ StrengthGraph strong_couplings(const Operator& a, std::int64_t n, const std::vec
 /// smoother. Per block, in the order of a.column; +inf on the diagonal. A is exactly symmetric
 /// (A_ji = A_ijᵀ), and the pair is always computed as in the row of its smaller index, so the
 /// strength of (i, j) and (j, i) are the same number.
-std::vector<float> directional_strengths(const BlockMatrix& a, const std::vector<Eigen::Matrix3d>& diagonal) {
+template <class Scalar>
+std::vector<float> directional_strengths(const BlockMatrixT<Scalar>& a, const std::vector<Eigen::Matrix3d>& diagonal) {
     const std::int64_t n = a.rows;
     std::vector<Eigen::Matrix3d> inverse_root(static_cast<std::size_t>(n));
 #pragma omp parallel for schedule(static) if (n >= kParallelMinRows)
@@ -170,7 +176,7 @@ std::vector<float> directional_strengths(const BlockMatrix& a, const std::vector
                 continue;
             }
             const std::int64_t low = std::min<std::int64_t>(i, j), high = std::max<std::int64_t>(i, j);
-            const Eigen::Matrix3d block = i < j ? a.block[std::size_t(q)] : Eigen::Matrix3d(a.block[std::size_t(q)].transpose());
+            const Eigen::Matrix3d block = i < j ? a.block_at(q) : Eigen::Matrix3d(a.block_at(q).transpose());
             const Eigen::Matrix3d m = inverse_root[std::size_t(low)] * block * inverse_root[std::size_t(high)];
             Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
             eigen.computeDirect(m.transpose() * m, Eigen::EigenvaluesOnly);
@@ -180,7 +186,8 @@ std::vector<float> directional_strengths(const BlockMatrix& a, const std::vector
 }
 
 /// The graph of the off-diagonal blocks of directional strength ≥ θ (symmetric: see above).
-StrengthGraph directional_graph(const BlockMatrix& a, const std::vector<float>& strength, double theta) {
+template <class Scalar>
+StrengthGraph directional_graph(const BlockMatrixT<Scalar>& a, const std::vector<float>& strength, double theta) {
     const std::int64_t n = a.rows;
     StrengthGraph g;
     g.start.assign(std::size_t(n + 1), 0);
@@ -204,12 +211,14 @@ StrengthGraph directional_graph(const BlockMatrix& a, const std::vector<float>& 
 
 /// (A + Aᵀ)/2 in place for a block matrix with a symmetric pattern: the Galerkin product PᵀAP is
 /// symmetric only up to rounding, and the smoother and the V-cycle rely on symmetry.
-void symmetrize(BlockMatrix& a) {
+template <class Scalar>
+void symmetrize(BlockMatrixT<Scalar>& a) {
+    using Block = typename BlockMatrixT<Scalar>::Block;
 #pragma omp parallel for schedule(static) if (a.rows >= kParallelMinRows)
     for (std::int64_t i = 0; i < a.rows; ++i) {
         // sort each row by column so that the mirror block can be found by bisection
         const std::int64_t first = a.start[std::size_t(i)], last = a.start[std::size_t(i + 1)];
-        std::vector<std::pair<std::int32_t, Eigen::Matrix3d>> row;
+        std::vector<std::pair<std::int32_t, Block>> row;
         row.reserve(std::size_t(last - first));
         for (std::int64_t q = first; q < last; ++q) row.emplace_back(a.column[std::size_t(q)], a.block[std::size_t(q)]);
         std::sort(row.begin(), row.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
@@ -230,8 +239,8 @@ void symmetrize(BlockMatrix& a) {
             const std::int32_t j = a.column[std::size_t(q)];
             if (j < i) continue;  // each pair once, by its upper block
             if (j == i) {
-                const Eigen::Matrix3d b = a.block[std::size_t(q)];
-                a.block[std::size_t(q)] = 0.5 * (b + b.transpose());
+                const Eigen::Matrix3d b = a.block_at(q);
+                a.block[std::size_t(q)] = (0.5 * (b + b.transpose())).template cast<Scalar>();
                 continue;
             }
             const std::int64_t mirror = find(j, std::int32_t(i));
@@ -239,8 +248,8 @@ void symmetrize(BlockMatrix& a) {
                 missing = true;
                 continue;
             }
-            const Eigen::Matrix3d average = 0.5 * (a.block[std::size_t(q)] + a.block[std::size_t(mirror)].transpose());
-            a.block[std::size_t(q)] = average;
+            const Block average = (0.5 * (a.block_at(q) + a.block_at(mirror).transpose())).template cast<Scalar>();
+            a.block[std::size_t(q)] = average;  // rounded once: the mirror is its exact transpose
             a.block[std::size_t(mirror)] = average.transpose();
         }
     if (missing) throw Error("algebraic multigrid: a coarse operator has an unsymmetric pattern");
@@ -288,14 +297,15 @@ std::vector<std::int32_t> aggregate_nodes(const StrengthGraph& strong, std::int6
 
 }  // namespace
 
-BlockMatrix filtered_fine_level(const RegularizationOperator& R, const std::vector<Eigen::Matrix3d>& diagonal, double theta) {
+template <class Scalar>
+BlockMatrixT<Scalar> filtered_fine_level(const RegularizationOperator& R, const std::vector<Eigen::Matrix3d>& diagonal, double theta) {
     const std::int64_t n = R.vertex_count();
     std::vector<double> diagonal_norm(static_cast<std::size_t>(n));
     for (std::int64_t i = 0; i < n; ++i) diagonal_norm[std::size_t(i)] = diagonal[std::size_t(i)].norm();
     const int threads = n >= kParallelMinRows ? omp_get_max_threads() : 1;
     std::vector<RegularizationOperator::Row> rows;
     for (int t = 0; t < threads; ++t) rows.emplace_back(n);
-    return build_by_rows(
+    return build_by_rows<Scalar>(
         n, n,
         [&](std::int64_t j, auto&& block) {
             RegularizationOperator::Row& row = rows[std::size_t(omp_get_thread_num())];
@@ -315,7 +325,8 @@ BlockMatrix filtered_fine_level(const RegularizationOperator& R, const std::vect
         [&](std::int64_t) { return std::int64_t(16); });
 }
 
-SmoothedAggregation::SmoothedAggregation(const Eigen::SparseMatrix<double>& R, const AmgSettings& settings) : settings_(settings) {
+template <class Scalar>
+SmoothedAggregation<Scalar>::SmoothedAggregation(const Eigen::SparseMatrix<double>& R, const AmgSettings& settings) : settings_(settings) {
     if (R.rows() % 3 != 0) throw Error("algebraic multigrid: the matrix is not made of 3x3 blocks");
     const ScalarRows rows = row_view(R);
     fine_nonzeros_ = double(R.nonZeros());
@@ -328,15 +339,17 @@ SmoothedAggregation::SmoothedAggregation(const Eigen::SparseMatrix<double>& R, c
     }
     // The hierarchy starts from R without its weak blocks (the fairness term's 2-ring): 64 % of
     // R's entries at h = 0.25, and half the setup and V-cycle cost, for 28 instead of 25 iterations.
-    build(filtered_blocks(rows, strong_couplings(rows, R.rows() / 3, diagonal_blocks(rows), settings_.strength_threshold)));
+    build(filtered_blocks<Scalar>(rows, strong_couplings(rows, R.rows() / 3, diagonal_blocks(rows), settings_.strength_threshold)));
 }
 
-SmoothedAggregation::SmoothedAggregation(BlockMatrix filtered_fine, double fine_nonzeros, const AmgSettings& settings)
+template <class Scalar>
+SmoothedAggregation<Scalar>::SmoothedAggregation(Matrix filtered_fine, double fine_nonzeros, const AmgSettings& settings)
     : settings_(settings), fine_nonzeros_(fine_nonzeros) {
     build(std::move(filtered_fine));
 }
 
-void SmoothedAggregation::factor_coarsest(const Eigen::SparseMatrix<double>& matrix) {
+template <class Scalar>
+void SmoothedAggregation<Scalar>::factor_coarsest(const Eigen::SparseMatrix<double>& matrix) {
     coarsest_ = std::make_unique<Coarsest>();
     coarsest_->cholesky.compute(matrix);
     if (coarsest_->cholesky.info() != Eigen::Success)
@@ -346,8 +359,9 @@ void SmoothedAggregation::factor_coarsest(const Eigen::SparseMatrix<double>& mat
 /// Aggregates of a level on the directional graph, its threshold halved while the aggregates are
 /// too many (a level whose couplings are weak in some direction almost everywhere, e.g. with the
 /// trivial normals of a staircase), and on the graph of strong blocks as the last resort.
-std::vector<std::int32_t> SmoothedAggregation::aggregate_level(const BlockMatrix& a, const std::vector<Eigen::Matrix3d>& diagonal,
-                                                               const StrengthGraph& strong, std::int64_t& count) const {
+template <class Scalar>
+std::vector<std::int32_t> SmoothedAggregation<Scalar>::aggregate_level(const Matrix& a, const std::vector<Eigen::Matrix3d>& diagonal,
+                                                                       const StrengthGraph& strong, std::int64_t& count) const {
     if (settings_.directional_threshold > 0) {
         const std::vector<float> strength = directional_strengths(a, diagonal);
         double theta = settings_.directional_threshold;
@@ -359,7 +373,8 @@ std::vector<std::int32_t> SmoothedAggregation::aggregate_level(const BlockMatrix
     return aggregate_nodes(strong, a.rows, count);
 }
 
-void SmoothedAggregation::build(BlockMatrix fine) {
+template <class Scalar>
+void SmoothedAggregation<Scalar>::build(Matrix fine) {
     auto level = std::make_unique<Level>();
     level->nodes = fine.rows;
     level->op = std::move(fine);
@@ -367,11 +382,13 @@ void SmoothedAggregation::build(BlockMatrix fine) {
     while (true) {
         Level& L = *level;
         const std::vector<Eigen::Matrix3d> diagonal = diagonal_blocks(L.op);
-        L.inverse_diagonal = inverted(diagonal);
+        const std::vector<Eigen::Matrix3d> inverse_diagonal = inverted(diagonal);
+        L.inverse_diagonal.resize(inverse_diagonal.size());
+        for (std::size_t i = 0; i < inverse_diagonal.size(); ++i) L.inverse_diagonal[i] = inverse_diagonal[i].template cast<Scalar>();
         if (L.nodes <= settings_.coarsest_nodes || int(levels_.size()) + 1 >= settings_.max_levels) break;
 
         // sets ω and the Chebyshev interval
-        L.lambda_max = largest_eigenvalue_bound(L.op, diagonal, L.inverse_diagonal, 12);
+        L.lambda_max = largest_eigenvalue_bound(L.op, diagonal, inverse_diagonal, 12);
 
         const StrengthGraph strong = strong_couplings(L.op, L.nodes, diagonal, settings_.strength_threshold);
         std::int64_t aggregates = 0;
@@ -385,7 +402,7 @@ void SmoothedAggregation::build(BlockMatrix fine) {
         for (std::int64_t i = 0; i < L.nodes; ++i) tentative[std::size_t(i)] = weight[std::size_t(i)] / coarse_weight[std::size_t(aggregate[std::size_t(i)])];
 
         const double omega = settings_.prolongator_damping / L.lambda_max;
-        L.prolongator = smoothed_prolongator(L.op, L.inverse_diagonal, strong, aggregate, tentative, aggregates, omega);
+        L.prolongator = smoothed_prolongator(L.op, inverse_diagonal, strong, aggregate, tentative, aggregates, omega);
         L.restriction = transpose(L.prolongator);
         auto next = std::make_unique<Level>();
         next->op = multiply(L.restriction, multiply(L.op, L.prolongator));  // Galerkin: Pᵀ A P
@@ -399,19 +416,24 @@ void SmoothedAggregation::build(BlockMatrix fine) {
     levels_.push_back(std::move(level));
 }
 
-SmoothedAggregation::~SmoothedAggregation() = default;
+template <class Scalar>
+SmoothedAggregation<Scalar>::~SmoothedAggregation() = default;
 
-int SmoothedAggregation::level_count() const { return int(levels_.size()); }
+template <class Scalar>
+int SmoothedAggregation<Scalar>::level_count() const { return int(levels_.size()); }
 
-double SmoothedAggregation::operator_complexity() const {
+template <class Scalar>
+double SmoothedAggregation<Scalar>::operator_complexity() const {
     double entries = 0;
     for (const auto& L : levels_) entries += 9.0 * double(L->op.block_count());
     return entries / fine_nonzeros_;
 }
 
-void SmoothedAggregation::apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const { vcycle(0, r, z); }
+template <class Scalar>
+void SmoothedAggregation<Scalar>::apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const { vcycle(0, r, z); }
 
-void SmoothedAggregation::vcycle(std::size_t index, const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
+template <class Scalar>
+void SmoothedAggregation<Scalar>::vcycle(std::size_t index, const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
     const Level& L = *levels_[index];
     if (index + 1 == levels_.size()) {
         x = coarsest_->cholesky.solve(b);
@@ -429,7 +451,8 @@ void SmoothedAggregation::vcycle(std::size_t index, const Eigen::VectorXd& b, Ei
 
 /// Chebyshev iteration on D⁻¹A over [λmax/range, λmax] (Saad, Iterative Methods, alg. 12.1): a
 /// fixed polynomial, so the V-cycle stays symmetric with the same pre- and post-smoother.
-void SmoothedAggregation::smooth(const Level& L, const Eigen::VectorXd& b, Eigen::VectorXd& x, bool zero_guess) const {
+template <class Scalar>
+void SmoothedAggregation<Scalar>::smooth(const Level& L, const Eigen::VectorXd& b, Eigen::VectorXd& x, bool zero_guess) const {
     const double upper = settings_.smoothing_safety * L.lambda_max, lower = upper / settings_.smoothing_range;
     const double theta = 0.5 * (upper + lower), delta = 0.5 * (upper - lower), sigma = theta / delta;
     double rho = 1 / sigma;
@@ -453,5 +476,24 @@ void SmoothedAggregation::smooth(const Level& L, const Eigen::VectorXd& b, Eigen
         rho = rho_next;
     }
 }
+
+std::unique_ptr<Multigrid> make_multigrid(const Eigen::SparseMatrix<double>& R, double data_weight_ratio, const AmgSettings& settings) {
+    if (data_weight_ratio >= settings.float_storage_min_data_weight) return std::make_unique<SmoothedAggregation<float>>(R, settings);
+    return std::make_unique<SmoothedAggregation<double>>(R, settings);
+}
+
+std::unique_ptr<Multigrid> make_multigrid(const RegularizationOperator& R, const std::vector<Eigen::Matrix3d>& diagonal,
+                                          double fine_nonzeros, double data_weight_ratio, const AmgSettings& settings) {
+    if (data_weight_ratio >= settings.float_storage_min_data_weight)
+        return std::make_unique<SmoothedAggregation<float>>(filtered_fine_level<float>(R, diagonal, settings.strength_threshold),
+                                                            fine_nonzeros, settings);
+    return std::make_unique<SmoothedAggregation<double>>(filtered_fine_level<double>(R, diagonal, settings.strength_threshold),
+                                                         fine_nonzeros, settings);
+}
+
+template class SmoothedAggregation<double>;
+template class SmoothedAggregation<float>;
+template BlockMatrixT<double> filtered_fine_level(const RegularizationOperator&, const std::vector<Eigen::Matrix3d>&, double);
+template BlockMatrixT<float> filtered_fine_level(const RegularizationOperator&, const std::vector<Eigen::Matrix3d>&, double);
 
 }  // namespace dsreg::detail

@@ -30,6 +30,13 @@ struct AmgSettings {
     /// If the directional graph leaves more than nodes / this aggregates, its threshold is halved
     /// (at most 4 times), then the graph of strength_threshold is used.
     double minimum_coarsening = 4;
+    /// make_multigrid stores the hierarchy in float (half the memory and memory traffic; every
+    /// computation in double) when min_i (R t)_i / mean diag(R) is at least this, the smallest
+    /// data weight `auto` gives to amg. The rounding of the entries (about 2^-24·‖R‖) perturbs
+    /// the preconditioner only: on lobster.vol, float and double hierarchies took the same
+    /// iterations (29, 70, 107, 152) at data weights 3.7e-4, 3.7e-5, 7.5e-6 and 1.9e-6 of the
+    /// diagonal. Below it (e.g. the paper's Fig. 7 α with --solver amg), double.
+    double float_storage_min_data_weight = 1e-6;
     int smoothing_degree = 2;          ///< Chebyshev degree of pre- and post-smoothing
     double smoothing_range = 30;       ///< Chebyshev targets [λmax/range, λmax] of D⁻¹A
     /// The Chebyshev interval ends at this × the Lanczos estimate of λmax(D⁻¹A). The estimate
@@ -47,31 +54,43 @@ class RegularizationOperator;
 /// The first level of the hierarchy straight from the operator's block rows (no scalar matrix):
 /// R without its weak blocks (‖R_jk‖_F < θ √(‖R_jj‖_F ‖R_kk‖_F)), each lumped into its row's
 /// diagonal block as diag(Σ_c |R_jk(r, c)|): the same matrix as filtered_blocks of the assembled R.
-BlockMatrix filtered_fine_level(const RegularizationOperator& R, const std::vector<Eigen::Matrix3d>& diagonal, double theta);
+template <class Scalar>
+BlockMatrixT<Scalar> filtered_fine_level(const RegularizationOperator& R, const std::vector<Eigen::Matrix3d>& diagonal, double theta);
 
-class SmoothedAggregation {
+/// One V-cycle as a preconditioner, whatever the precision of the hierarchy.
+class Multigrid {
 public:
+    virtual ~Multigrid() = default;
+    /// z = M⁻¹ r: one symmetric V-cycle from a zero initial guess.
+    virtual void apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const = 0;
+    virtual int level_count() const = 0;
+    /// Σ over levels of the operator's stored scalar entries / entries of R.
+    virtual double operator_complexity() const = 0;
+};
+
+/// The hierarchy with its matrices stored in Scalar (float or double).
+template <class Scalar>
+class SmoothedAggregation : public Multigrid {
+public:
+    using Matrix = BlockMatrixT<Scalar>;
     /// Builds the hierarchy for R (symmetric, both triangles stored).
     SmoothedAggregation(const Eigen::SparseMatrix<double>& R, const AmgSettings& settings);
     /// Builds the hierarchy from the fine level R without its weak blocks (filtered_fine_level);
     /// `fine_nonzeros` (R's scalar entries) is the reference of operator_complexity().
-    SmoothedAggregation(BlockMatrix filtered_fine, double fine_nonzeros, const AmgSettings& settings);
-    ~SmoothedAggregation();
+    SmoothedAggregation(Matrix filtered_fine, double fine_nonzeros, const AmgSettings& settings);
+    ~SmoothedAggregation() override;
     SmoothedAggregation(const SmoothedAggregation&) = delete;
     SmoothedAggregation& operator=(const SmoothedAggregation&) = delete;
 
-    /// z = M⁻¹ r: one symmetric V-cycle from a zero initial guess.
-    void apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const;
-
-    int level_count() const;
-    /// Σ over levels of the operator's stored scalar entries / entries of R.
-    double operator_complexity() const;
+    void apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const override;
+    int level_count() const override;
+    double operator_complexity() const override;
 
 private:
     struct Level;
     struct Coarsest;
-    void build(BlockMatrix fine);
-    std::vector<std::int32_t> aggregate_level(const BlockMatrix& a, const std::vector<Eigen::Matrix3d>& diagonal,
+    void build(Matrix fine);
+    std::vector<std::int32_t> aggregate_level(const Matrix& a, const std::vector<Eigen::Matrix3d>& diagonal,
                                               const StrengthGraph& strong, std::int64_t& count) const;
     void factor_coarsest(const Eigen::SparseMatrix<double>& matrix);
     void vcycle(std::size_t level, const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
@@ -82,5 +101,12 @@ private:
     std::vector<std::unique_ptr<Level>> levels_;
     std::unique_ptr<Coarsest> coarsest_;
 };
+
+/// The hierarchy in float when `data_weight_ratio` (SpdSystem::data_weight_ratio) allows it
+/// (AmgSettings::float_storage_min_data_weight), else in double: for an assembled R, or from the
+/// operator's block rows and diagonal blocks (fine_nonzeros: R's scalar entries).
+std::unique_ptr<Multigrid> make_multigrid(const Eigen::SparseMatrix<double>& R, double data_weight_ratio, const AmgSettings& settings);
+std::unique_ptr<Multigrid> make_multigrid(const RegularizationOperator& R, const std::vector<Eigen::Matrix3d>& diagonal,
+                                          double fine_nonzeros, double data_weight_ratio, const AmgSettings& settings);
 
 }  // namespace dsreg::detail

@@ -132,7 +132,7 @@ SolveReport solve_block_jacobi_cg(const detail::SpdSystem& system, const Eigen::
 /// unspecified) if the tolerance is not met within `max_iterations`.
 bool solve_amg(const detail::SpdSystem& system, const Eigen::VectorXd& b, Eigen::VectorXd& x,
                const SolverOptions& options, int max_iterations, SolveReport& report) {
-    const std::unique_ptr<detail::SmoothedAggregation> amg = system.multigrid(detail::AmgSettings{});
+    const std::unique_ptr<detail::Multigrid> amg = system.multigrid(detail::AmgSettings{});
     const detail::Preconditioner vcycle = [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) { amg->apply(r, z); };
     const detail::CgResult cg = detail::preconditioned_conjugate_gradient(
         product(system), system.infinity_norm(), b, x, vcycle, stop_rule(options, max_iterations, "amg"));

@@ -31,8 +31,8 @@ double AssembledSystem::data_weight_ratio() const {
     return rows.rows() > 0 && diagonal > 0 ? smallest / (diagonal / double(rows.rows())) : 0.0;
 }
 
-std::unique_ptr<SmoothedAggregation> AssembledSystem::multigrid(const AmgSettings& settings) const {
-    return std::make_unique<SmoothedAggregation>(R_, settings);
+std::unique_ptr<Multigrid> AssembledSystem::multigrid(const AmgSettings& settings) const {
+    return make_multigrid(R_, data_weight_ratio(), settings);
 }
 
 OperatorSystem::OperatorSystem(const RegularizationOperator& R, double smallest_data_weight)
@@ -42,9 +42,8 @@ double OperatorSystem::data_weight_ratio() const {
     return summary_.mean_diagonal > 0 ? smallest_data_weight_ / summary_.mean_diagonal : 0.0;
 }
 
-std::unique_ptr<SmoothedAggregation> OperatorSystem::multigrid(const AmgSettings& settings) const {
-    return std::make_unique<SmoothedAggregation>(filtered_fine_level(R_, summary_.diagonal, settings.strength_threshold),
-                                                 summary_.scalar_nonzeros, settings);
+std::unique_ptr<Multigrid> OperatorSystem::multigrid(const AmgSettings& settings) const {
+    return make_multigrid(R_, summary_.diagonal, summary_.scalar_nonzeros, data_weight_ratio(), settings);
 }
 
 const Eigen::SparseMatrix<double>& OperatorSystem::matrix() const {

@@ -30,7 +30,7 @@ public:
     /// relative to the whole diagonal (see solvers.cpp).
     virtual double data_weight_ratio() const = 0;
     /// The multigrid hierarchy of R.
-    virtual std::unique_ptr<SmoothedAggregation> multigrid(const AmgSettings& settings) const = 0;
+    virtual std::unique_ptr<Multigrid> multigrid(const AmgSettings& settings) const = 0;
     /// R assembled (scalar CSR, both triangles), for the direct solver.
     virtual const Eigen::SparseMatrix<double>& matrix() const = 0;
 };
@@ -44,7 +44,7 @@ public:
     double infinity_norm() const override { return infinity_norm_; }
     const std::vector<Eigen::Matrix3d>& diagonal_blocks() const override { return diagonal_; }
     double data_weight_ratio() const override;
-    std::unique_ptr<SmoothedAggregation> multigrid(const AmgSettings& settings) const override;
+    std::unique_ptr<Multigrid> multigrid(const AmgSettings& settings) const override;
     const Eigen::SparseMatrix<double>& matrix() const override { return R_; }
 
 private:
@@ -63,7 +63,7 @@ public:
     double infinity_norm() const override { return summary_.infinity_norm; }
     const std::vector<Eigen::Matrix3d>& diagonal_blocks() const override { return summary_.diagonal; }
     double data_weight_ratio() const override;
-    std::unique_ptr<SmoothedAggregation> multigrid(const AmgSettings& settings) const override;
+    std::unique_ptr<Multigrid> multigrid(const AmgSettings& settings) const override;
     const Eigen::SparseMatrix<double>& matrix() const override;
 
 private:
