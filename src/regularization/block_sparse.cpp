@@ -68,42 +68,71 @@ Eigen::SparseMatrix<double> BlockMatrixT<Scalar>::to_scalar() const {
 }
 
 template <class Scalar>
-BlockMatrixT<Scalar> transpose(const BlockMatrixT<Scalar>& a) {
-    BlockMatrixT<Scalar> t;
-    t.rows = a.cols;
-    t.cols = a.rows;
-    t.start.assign(std::size_t(t.rows + 1), 0);
-    for (std::int32_t j : a.column) ++t.start[std::size_t(j) + 1];
-    for (std::int64_t j = 0; j < t.rows; ++j) t.start[std::size_t(j + 1)] += t.start[std::size_t(j)];
-    t.column.resize(a.column.size());
-    t.block.resize(a.block.size());
+TransposedPattern transposed_pattern(const BlockMatrixT<Scalar>& p) {
+    TransposedPattern t;
+    t.start.assign(std::size_t(p.cols + 1), 0);
+    for (std::int32_t j : p.column) ++t.start[std::size_t(j) + 1];
+    for (std::int64_t j = 0; j < p.cols; ++j) t.start[std::size_t(j + 1)] += t.start[std::size_t(j)];
+    t.row.resize(p.column.size());
+    t.source.resize(p.column.size());
     std::vector<std::int64_t> next(t.start.begin(), t.start.end() - 1);
-    for (std::int64_t i = 0; i < a.rows; ++i)
-        for (std::int64_t q = a.start[std::size_t(i)]; q < a.start[std::size_t(i + 1)]; ++q) {
-            const std::int64_t slot = next[std::size_t(a.column[std::size_t(q)])]++;
-            t.column[std::size_t(slot)] = std::int32_t(i);
-            t.block[std::size_t(slot)] = a.block[std::size_t(q)].transpose();
+    for (std::int64_t i = 0; i < p.rows; ++i)
+        for (std::int64_t q = p.start[std::size_t(i)]; q < p.start[std::size_t(i + 1)]; ++q) {
+            const std::int64_t slot = next[std::size_t(p.column[std::size_t(q)])]++;
+            t.row[std::size_t(slot)] = std::int32_t(i);
+            t.source[std::size_t(slot)] = q;
         }
     return t;
 }
 
 template <class Scalar>
-BlockMatrixT<Scalar> multiply(const BlockMatrixT<Scalar>& a, const BlockMatrixT<Scalar>& b) {
+void BlockMatrixT<Scalar>::multiply_transposed(const Eigen::VectorXd& x, Eigen::VectorXd& y, std::vector<Eigen::VectorXd>& scratch) const {
+    // Scattered along the rows of A (read once, in order) into one accumulator per thread; the
+    // accumulators (as long as the short side of A: the coarse level) are then summed.
+    const int threads = rows >= kParallelMinRows ? omp_get_max_threads() : 1;
+    y.setZero(3 * cols);
+    if (threads > 1) scratch.resize(std::size_t(threads));
+#pragma omp parallel num_threads(threads)
+    {
+        const int t = omp_get_thread_num(), nt = omp_get_num_threads();
+        Eigen::VectorXd& sum = nt > 1 ? scratch[std::size_t(t)] : y;
+        if (nt > 1) sum.setZero(3 * cols);
+        const std::int64_t first = rows * t / nt, last = rows * (t + 1) / nt;
+        for (std::int64_t i = first; i < last; ++i) {
+            const Eigen::Vector3d xi = x.segment<3>(3 * i);
+            for (std::int64_t q = start[std::size_t(i)]; q < start[std::size_t(i + 1)]; ++q)
+                sum.segment<3>(3 * std::int64_t(column[std::size_t(q)])).noalias() += block[std::size_t(q)].template cast<double>().transpose() * xi;
+        }
+        if (nt > 1) {
+#pragma omp barrier
+            const std::int64_t n = 3 * cols, begin = n * t / nt, end = n * (t + 1) / nt;
+            for (int u = 0; u < nt; ++u) y.segment(begin, end - begin) += scratch[std::size_t(u)].segment(begin, end - begin);
+        }
+    }
+}
+
+template <class Scalar>
+BlockMatrixT<Scalar> galerkin_product(const BlockMatrixT<Scalar>& a, const BlockMatrixT<Scalar>& p, const TransposedPattern& t) {
     return build_by_rows<Scalar>(
-        a.rows, b.cols,
-        [&](std::int64_t i, auto&& block) {
-            for (std::int64_t p = a.start[std::size_t(i)]; p < a.start[std::size_t(i + 1)]; ++p) {
-                const Eigen::Matrix3d left = a.block_at(p);
-                const std::int64_t k = a.column[std::size_t(p)];
-                for (std::int64_t q = b.start[std::size_t(k)]; q < b.start[std::size_t(k + 1)]; ++q)
-                    block(b.column[std::size_t(q)]).noalias() += left * b.block_at(q);
+        p.cols, p.cols,
+        [&](std::int64_t c, auto&& block) {
+            for (std::int64_t q = t.start[std::size_t(c)]; q < t.start[std::size_t(c + 1)]; ++q) {
+                const std::int64_t i = t.row[std::size_t(q)];
+                const Eigen::Matrix3d left = p.block_at(t.source[std::size_t(q)]).transpose();  // P(i, c)ᵀ
+                for (std::int64_t r = a.start[std::size_t(i)]; r < a.start[std::size_t(i + 1)]; ++r) {
+                    const Eigen::Matrix3d middle = left * a.block_at(r);  // P(i, c)ᵀ A(i, k)
+                    const std::int64_t k = a.column[std::size_t(r)];
+                    for (std::int64_t s = p.start[std::size_t(k)]; s < p.start[std::size_t(k + 1)]; ++s)
+                        block(p.column[std::size_t(s)]).noalias() += middle * p.block_at(s);
+                }
             }
         },
-        [&](std::int64_t i) {
+        [&](std::int64_t c) {
+            // at most the coarse neighbours within two fine rows; a loose bound (only reserved)
             std::int64_t bound = 0;
-            for (std::int64_t p = a.start[std::size_t(i)]; p < a.start[std::size_t(i + 1)]; ++p) {
-                const std::int64_t k = a.column[std::size_t(p)];
-                bound += b.start[std::size_t(k + 1)] - b.start[std::size_t(k)];
+            for (std::int64_t q = t.start[std::size_t(c)]; q < t.start[std::size_t(c + 1)]; ++q) {
+                const std::int64_t i = t.row[std::size_t(q)];
+                bound += 2 * (a.start[std::size_t(i + 1)] - a.start[std::size_t(i)]);
             }
             return bound;
         });
@@ -225,14 +254,15 @@ void block_row_norms(const BlockMatrixT<Scalar>& a, std::int64_t i, std::vector<
 // The two precisions of the multigrid hierarchy.
 #define DSREG_BLOCK_SPARSE_INSTANTIATE(Scalar)                                                                           \
     template struct BlockMatrixT<Scalar>;                                                                                \
-    template BlockMatrixT<Scalar> transpose(const BlockMatrixT<Scalar>&);                                               \
-    template BlockMatrixT<Scalar> multiply(const BlockMatrixT<Scalar>&, const BlockMatrixT<Scalar>&);                   \
     template BlockMatrixT<Scalar> smoothed_prolongator(const BlockMatrixT<Scalar>&, const std::vector<Eigen::Matrix3d>&, \
                                                        const StrengthGraph&, const std::vector<std::int32_t>&,          \
                                                        const std::vector<double>&, std::int64_t, double);               \
     template BlockMatrixT<Scalar> filtered_blocks(const ScalarRows&, const StrengthGraph&);                              \
     template std::vector<Eigen::Matrix3d> diagonal_blocks(const BlockMatrixT<Scalar>&);                                 \
-    template void block_row_norms(const BlockMatrixT<Scalar>&, std::int64_t, std::vector<double>&, BlockRowNorms&);
+    template void block_row_norms(const BlockMatrixT<Scalar>&, std::int64_t, std::vector<double>&, BlockRowNorms&);   \
+    template TransposedPattern transposed_pattern(const BlockMatrixT<Scalar>&);                                          \
+    template BlockMatrixT<Scalar> galerkin_product(const BlockMatrixT<Scalar>&, const BlockMatrixT<Scalar>&,            \
+                                                   const TransposedPattern&);
 DSREG_BLOCK_SPARSE_INSTANTIATE(double)
 DSREG_BLOCK_SPARSE_INSTANTIATE(float)
 #undef DSREG_BLOCK_SPARSE_INSTANTIATE

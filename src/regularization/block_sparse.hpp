@@ -39,6 +39,8 @@ struct BlockMatrixT {
     Eigen::Matrix3d block_at(std::int64_t q) const { return block[std::size_t(q)].template cast<double>(); }
     /// y = A x (parallel over block rows).
     void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+    /// y = Aᵀ x (parallel over block rows; `scratch` holds one accumulator per thread).
+    void multiply_transposed(const Eigen::VectorXd& x, Eigen::VectorXd& y, std::vector<Eigen::VectorXd>& scratch) const;
     /// The same matrix as scalar column-major CSC (for CHOLMOD on the coarsest level).
     Eigen::SparseMatrix<double> to_scalar() const;
 };
@@ -110,12 +112,21 @@ BlockMatrixT<Scalar> build_by_rows(std::int64_t rows, std::int64_t cols, FillRow
     return build_by_rows<Scalar>(rows, cols, fill_row, row_bound, [](std::int64_t, const std::int32_t*, Eigen::Matrix3d*, std::size_t) {});
 }
 
+/// The pattern of Pᵀ for a block matrix P, pointing into P's blocks instead of copying them (12
+/// bytes per block instead of 40–76): row a of Pᵀ holds the blocks P(row[q], a) = P.block[source[q]]
+/// for q in [start[a], start[a+1]), in increasing fine row.
+struct TransposedPattern {
+    std::vector<std::int64_t> start{0};
+    std::vector<std::int32_t> row;
+    std::vector<std::int64_t> source;
+};
 template <class Scalar>
-BlockMatrixT<Scalar> transpose(const BlockMatrixT<Scalar>& a);
+TransposedPattern transposed_pattern(const BlockMatrixT<Scalar>& p);
 
-/// A·B for block matrices (accumulated in double, stored in the precision of A).
+/// The Galerkin product Pᵀ A P, row by row of Pᵀ: row a is Σ_{i} P(i,a)ᵀ Σ_k A(i,k) P(k,·), summed
+/// in double without storing A·P (which would hold about 8 blocks per fine row).
 template <class Scalar>
-BlockMatrixT<Scalar> multiply(const BlockMatrixT<Scalar>& a, const BlockMatrixT<Scalar>& b);
+BlockMatrixT<Scalar> galerkin_product(const BlockMatrixT<Scalar>& a, const BlockMatrixT<Scalar>& p, const TransposedPattern& t);
 
 /// A copy with the blocks rounded to another precision.
 template <class To, class From>

@@ -20,8 +20,8 @@ struct SmoothedAggregation<Scalar>::Level {
     std::vector<typename Matrix::Block> inverse_diagonal;
     double lambda_max = 0;  ///< upper estimate of the largest eigenvalue of D⁻¹A (Lanczos)
     Matrix prolongator;     ///< P: next coarser level → this level
-    Matrix restriction;     ///< Pᵀ
     mutable Eigen::VectorXd residual, direction, preconditioned, coarse_rhs, coarse_solution;
+    mutable std::vector<Eigen::VectorXd> restriction_scratch;  ///< Pᵀ r: one accumulator per thread
 };
 
 template <class Scalar>
@@ -403,9 +403,8 @@ void SmoothedAggregation<Scalar>::build(Matrix fine) {
 
         const double omega = settings_.prolongator_damping / L.lambda_max;
         L.prolongator = smoothed_prolongator(L.op, inverse_diagonal, strong, aggregate, tentative, aggregates, omega);
-        L.restriction = transpose(L.prolongator);
         auto next = std::make_unique<Level>();
-        next->op = multiply(L.restriction, multiply(L.op, L.prolongator));  // Galerkin: Pᵀ A P
+        next->op = galerkin_product(L.op, L.prolongator, transposed_pattern(L.prolongator));  // Pᵀ A P
         symmetrize(next->op);
         next->nodes = aggregates;
         weight.swap(coarse_weight);
@@ -442,7 +441,7 @@ void SmoothedAggregation<Scalar>::vcycle(std::size_t index, const Eigen::VectorX
     smooth(L, b, x, true);
     L.op.multiply(x, L.residual);
     L.residual = b - L.residual;
-    L.restriction.multiply(L.residual, L.coarse_rhs);
+    L.prolongator.multiply_transposed(L.residual, L.coarse_rhs, L.restriction_scratch);
     vcycle(index + 1, L.coarse_rhs, L.coarse_solution);
     L.prolongator.multiply(L.coarse_solution, L.residual);
     x += L.residual;
