@@ -1,5 +1,6 @@
 #include "view_command.hpp"
 
+#include <cstdint>
 #include <filesystem>
 #include <iostream>
 #include <string>
@@ -18,6 +19,7 @@ struct ViewOptions {
     std::vector<std::string> meshes;
     std::string digital, output, title;
     double feature_threshold = 0.5;
+    std::int64_t max_faces = kDefaultMaxViewFaces;
     bool quiet = false;
 };
 
@@ -42,6 +44,7 @@ void run(const ViewOptions& o) {
     check_page_output_path("-o", o.output);
     ViewPage page;
     page.feature_threshold = o.feature_threshold;
+    page.max_faces = o.max_faces;
     for (const std::string& path : o.meshes) page.layers.push_back(read_layer(path));
     if (!o.digital.empty()) {
         const PolygonMesh digital = read_mesh(o.digital);
@@ -82,6 +85,11 @@ void add_view_command(CLI::App& app) {
     cmd->add_option("--title", options->title, "Title of the page (default: the file names)");
     cmd->add_option("--feature-threshold", options->feature_threshold,
                     "Feature lines: the edges whose two ends have a feature map v below this")
+        ->capture_default_str();
+    cmd->add_option("--max-faces", options->max_faces,
+                    "Refuse pages with more faces in all (meshes and digital surfaces): larger pages take long to "
+                    "open and gigabytes in the browser (docs/viewer.md)")
+        ->check(CLI::PositiveNumber)
         ->capture_default_str();
     cmd->add_flag("-q,--quiet", options->quiet, "Print nothing but errors");
     cmd->callback([options] { run(*options); });
