@@ -1,4 +1,4 @@
-#include "output_paths.hpp"
+#include "dsreg/output_paths.hpp"
 
 #include <filesystem>
 

@@ -11,7 +11,7 @@
 #include "dsreg/mesh_io.hpp"
 #include "dsreg/normals_file.hpp"
 #include "dsreg/text.hpp"
-#include "output_paths.hpp"
+#include "dsreg/output_paths.hpp"
 #include "pipeline_stages.hpp"
 #include "stage_clock.hpp"
 

@@ -1,4 +1,5 @@
-// dsreg pipeline — checks on output paths, made before any long computation.
+// dsreg — checks on output paths, made before any long computation (folders exist, formats are
+// known, no two outputs on one file).
 #pragma once
 
 #include <string>
