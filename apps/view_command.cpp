@@ -9,7 +9,7 @@
 #include "dsreg/error.hpp"
 #include "dsreg/html_view.hpp"
 #include "dsreg/mesh_io.hpp"
-#include "output_paths.hpp"
+#include "dsreg/output_paths.hpp"
 
 namespace dsreg::cli {
 

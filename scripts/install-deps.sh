@@ -10,7 +10,7 @@
 # libjs-three is a build dependency: three.js is inlined into dsreg's HTML pages (docs/viewer.md).
 set -euo pipefail
 packages=(build-essential cmake pkg-config libeigen3-dev libsuitesparse-dev libopenblas-dev zlib1g-dev
-          libcli11-dev nlohmann-json3-dev libjs-three)
+          libcli11-dev nlohmann-json3-dev libcgal-dev libjs-three)
 dev=(libgtest-dev libgmock-dev libbenchmark-dev)
 for option in "$@"; do
     case $option in
