@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# End-to-end checks of `dsreg view` without a browser (viewer_browser_test.py opens the pages):
+# End-to-end checks of `dsreg view` and `regularize --html` without a browser (viewer_browser_test.py
+# opens the pages):
 # the page holds every mesh given, names out of ASCII, and the errors: a mesh without faces, too
 # many faces, a digital surface that does not match, a page that is not .html, a missing folder or
 # file; a failed run leaves no page behind and keeps an existing one.
@@ -19,6 +20,19 @@ check "digital surface paired with the mesh of as many vertices" grep -q '"digit
 check "displacement of g.ply" grep -q '"kind":"length"' <<<"$data"
 check "three.js inside" grep -q 'REVISION="111"' "$work/page.html"
 check "buffers inside" grep -q 'id="dsreg-buffer-0-0"' "$work/page.html"
+
+# regularize --html: the run's page, with the digital surface and the summary.
+"$DSREG" regularize --shape goursat --h 0.5 -o "$work/r.ply" --html "$work/page-run.html" -q
+check "regularize --html writes the page" test -s "$work/page-run.html"
+run=$(grep -o '<script type="application/json" id="dsreg-page">.*</script>' "$work/page-run.html")
+check "run page: digital surface" grep -q '"digital":{' <<<"$run"
+check "run page: summary" grep -q '\["surfels","[0-9]*"\]' <<<"$run"
+check "run page: deviation" grep -q '"deviation":{' <<<"$run"
+rm -f "$work/page-run.html"
+expect_error "regularize --html not .html" "--html $work/page.png: the page must be an .html file" \
+    regularize --shape goursat --h 0.5 -o "$work/page.ply" --html "$work/page.png"
+expect_error "regularize --html on the report" "--html $work/page.html: same file as --report" \
+    regularize --shape goursat --h 0.5 -o "$work/page.ply" --report "$work/page.html" --html "$work/page.html"
 
 # Names out of ASCII, for the meshes and the page.
 cp "$work/g.ply" "$work/géométrie 立方体.ply"

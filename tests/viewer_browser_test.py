@@ -7,11 +7,14 @@ Each page is opened through a copy that carries a Content-Security-Policy of the
 forbidding every load (files, network, anything), so that a page referring to anything outside
 itself shows in the console; a control page with external references checks that it does.
 
-Checked: the page reports itself ready with no error, the console is empty, the mesh covers a good
-part of the picture with shading (many grey levels), each colour mode / toggle / layer changes the
-picture, the AT feature map shows red feature lines, a labelled sphere shows every label's colour
-(the legend's colours, read from the DOM) on the front of its faces and the outside label on their
-back, and file names out of ASCII give a working page.
+Pages of `dsreg view` (goursat with its digital surface; two layers with names out of ASCII), of
+`dsreg regularize --html` (a cube with Ambrosio-Tortorelli normals) and of the library
+(viewer_test_pages: labelled spheres). Checked: the page reports itself ready with no error, the
+console is empty, the mesh covers a good part of the picture with shading (many grey levels),
+each colour mode / toggle / layer changes the picture, the AT feature map shows red feature lines,
+a run's page holds its summary, a labelled sphere shows every label's colour (the legend's
+colours, read from the DOM) on the front of its faces and the outside label on their back, and
+file names out of ASCII give a working page.
 
 Environment: DSREG (the dsreg executable), DSREG_TEST_PAGES (tests/viewer_test_pages). Needs
 chromium and python3-pil (scripts/install-deps.sh --viewer). Run with Debian's /usr/bin/python3.
@@ -141,9 +144,8 @@ def run_checks(work):
     dsreg("regularize", "--shape", "goursat", "--h", "0.5", "-o", path("g.ply"), "--input-mesh", path("g-digital.ply"))
     cube = "(0.8*x+0.6*y)^16+(-0.48*x+0.64*y+0.6*z)^16+(0.36*x-0.48*y+0.8*z)^16-1"
     dsreg("regularize", "--shape", cube, "--box", "1.8", "--h", "0.1", "--radius", "0.3", "--normals", "at",
-          "-o", path("cube.ply"))
+          "-o", path("cube.ply"), "--html", path("cube.html"))  # the page of a run
     dsreg("view", path("g.ply"), "--digital", path("g-digital.ply"), "-o", path("g.html"))
-    dsreg("view", path("cube.ply"), "-o", path("cube.html"))
     names = ["géométrie 立方体.ply", "cube, copie №2.ply"]
     shutil.copy(path("g.ply"), path(names[0]))
     shutil.copy(path("cube.ply"), path(names[1]))
@@ -197,6 +199,9 @@ def run_checks(work):
     red = (190, 22, 30)  # the colour of v = 0 (viewer.js)
     features, smooth = hue_share(shots["cube features"].image, red), hue_share(shots["cube plain"].image, red)
     check("feature map shows red features", features > 0.01 and smooth < 0.002, "%.4f vs %.4f" % (features, smooth))
+    summary = re.findall(r"<tr><th>([^<]*)</th><td>([^<]*)</td></tr>", shots["cube features"].dom)
+    check("run page: summary of the run", {"input", "surfels", "normal field", "regularize", "total"}
+          <= {name for name, _ in summary}, str(summary)[:400])
 
     colours = legend_colours(shots["labels"].dom)
     check("legend lists labels 0-4", sorted(colours) == [0, 1, 2, 3, 4], str(colours))

@@ -72,6 +72,7 @@ struct ViewPage {
     std::vector<ViewLayer> layers;     ///< at least one
     std::vector<SummaryLine> summary;  ///< the run's summary (input, counts, parameters, times)
     double feature_threshold = 0.5;    ///< v below which a vertex is on a feature line
+    std::string length_unit = "mesh units";  ///< unit of lengths in the legend (displacement)
     std::int64_t max_faces = kDefaultMaxViewFaces;
 };
 

@@ -1,5 +1,6 @@
 // dsreg pipeline — the stages of run_pipeline (include/dsreg/pipeline.hpp), one file each:
-// normal_field.cpp, regularization_extensions.cpp; volume_source.cpp holds stage 1.
+// normal_field.cpp, regularization_extensions.cpp; volume_source.cpp holds stage 1, result_page.cpp
+// the --html page.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -9,6 +10,9 @@
 #include "stage_clock.hpp"
 
 namespace dsreg {
+
+/// The sum of the stage times of `result` (seconds).
+double total_seconds(const PipelineResult& result);
 
 /// Estimates (or reads) the input field and, for --normals at, regularizes it; stages "normals"
 /// and "at" on `clock`.

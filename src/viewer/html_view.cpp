@@ -98,8 +98,9 @@ Eigen::Vector3d page_centre(const ViewPage& page) {
     return low.allFinite() && high.allFinite() ? Eigen::Vector3d((low + high) / 2) : Eigen::Vector3d::Zero();
 }
 
-/// Colour range of a field: [0, 99th percentile] for angles (at least 0.1 degree), [0, max]
-/// for lengths, [0, 1] for the feature map, [min, max] for other scalars. NaNs are left out.
+/// Colour range of a field: [0, 99th percentile] for angles and lengths (so that a few large
+/// values do not wash out the rest; at least 0.1 degree, or the largest length), [0, 1] for the
+/// feature map, [min, max] for other scalars. NaNs are left out.
 std::pair<double, double> colour_range(const Eigen::VectorXd& values, const std::string& kind) {
     if (kind == "feature_map") return {0.0, 1.0};
     std::vector<double> finite;
@@ -107,14 +108,14 @@ std::pair<double, double> colour_range(const Eigen::VectorXd& values, const std:
     for (Eigen::Index i = 0; i < values.size(); ++i)
         if (std::isfinite(values[i])) finite.push_back(values[i]);
     if (finite.empty()) return {0.0, 1.0};
-    if (kind == "angle") {
-        const std::size_t at = std::min(finite.size() - 1, std::size_t(0.99 * double(finite.size())));
-        std::nth_element(finite.begin(), finite.begin() + std::ptrdiff_t(at), finite.end());
-        return {0.0, std::max(0.1, finite[at])};
-    }
     const auto [low, high] = std::minmax_element(finite.begin(), finite.end());
-    if (kind == "length") return {0.0, *high > 0 ? *high : 1.0};
-    return {*low, *high > *low ? *high : *low + 1};
+    if (kind == "scalar") return {*low, *high > *low ? *high : *low + 1};
+    const double largest = *high;
+    const std::size_t at = std::min(finite.size() - 1, std::size_t(0.99 * double(finite.size())));
+    std::nth_element(finite.begin(), finite.begin() + std::ptrdiff_t(at), finite.end());
+    const double p99 = finite[at];
+    if (kind == "angle") return {0.0, std::max(0.1, p99)};
+    return {0.0, p99 > 0 ? p99 : largest > 0 ? largest : 1.0};  // lengths
 }
 
 nlohmann::json field_json(PageBuffers& buffers, const std::string& name, const std::string& kind,
@@ -173,7 +174,7 @@ nlohmann::json layer_json(PageBuffers& buffers, const ViewLayer& layer, const Vi
     nlohmann::json fields = nlohmann::json::array();  // per-vertex colour modes
     if (layer.digital) {
         json["digital"] = surface_json(buffers, *layer.digital, layer, centre);
-        fields.push_back(field_json(buffers, "displacement |p* - p|", "length", "mesh units",
+        fields.push_back(field_json(buffers, "displacement |p* - p|", "length", page.length_unit,
                                     vertex_displacements(layer.mesh.vertices, layer.digital->vertices)));
     }
     for (const auto& [name, values] : layer.mesh.vertex_scalars) {

@@ -360,9 +360,22 @@
   if (!(up in upAxes)) up = '+z';
   camera.up.fromArray(upAxes[up]);
 
-  var controls = new THREE.OrbitControls(camera, renderer.domElement);
-  controls.screenSpacePanning = true;
-  controls.addEventListener('change', requestRender);
+  // OrbitControls turns about camera.up as it was when they were made: new ones for a new up.
+  function makeControls() {
+    var made = new THREE.OrbitControls(camera, renderer.domElement);
+    made.screenSpacePanning = true;
+    made.addEventListener('change', requestRender);
+    return made;
+  }
+  var controls = makeControls();
+  function setUp(axis) {
+    up = axis;
+    camera.up.fromArray(upAxes[up]);
+    controls.dispose();
+    controls = makeControls();
+    resetView();
+    requestRender();
+  }
 
   var layers = page.layers.map(function (layer, i) { return new LayerView(layer, i + 1); });
   layers.forEach(function (view) { scene.add(view.group); view.group.visible = false; });
@@ -454,6 +467,14 @@
   colourSelect.addEventListener('change', function () { state.colour = colourSelect.value; update(); });
   panel.appendChild(element('label', { 'for': 'dsreg-colour', 'class': 'row' },
     [document.createTextNode('colour '), colourSelect]));
+  var upSelect = element('select', { id: 'dsreg-up' });
+  Object.keys(upAxes).forEach(function (axis) {
+    var option = element('option', { value: axis, text: axis });
+    option.selected = axis === up;
+    upSelect.appendChild(option);
+  });
+  upSelect.addEventListener('change', function () { setUp(upSelect.value); });
+  panel.appendChild(element('label', { 'for': 'dsreg-up', 'class': 'row' }, [document.createTextNode('up '), upSelect]));
   var toggles = {
     surface: checkbox('dsreg-show-surface', 'surface', 'surface'),
     digital: checkbox('dsreg-show-digital', 'digital surface', 'digital'),
@@ -508,9 +529,9 @@
     }
     legend.appendChild(bar);
     var low = mode.range[0], high = mode.range[1];
-    // Values beyond the range take the end colours: above the 99th percentile for angles, outside
-    // [0, 1] for the feature map (other ranges are the values' own minimum and maximum).
-    var clippedLow = mode.kind === 'feature_map', clippedHigh = mode.kind === 'feature_map' || mode.kind === 'angle';
+    // Values beyond the range take the end colours: above the 99th percentile for angles and
+    // lengths, outside [0, 1] for the feature map (other ranges are the values' minimum and maximum).
+    var clippedLow = mode.kind === 'feature_map', clippedHigh = mode.kind !== 'scalar';
     var ticks = element('div', { 'class': 'ticks' }, [low, (low + high) / 2, high].map(function (value, i) {
       var prefix = i === 0 && clippedLow ? '\u2264 ' : i === 2 && clippedHigh ? '\u2265 ' : '';
       return element('span', { text: prefix + formatNumber(value) });
