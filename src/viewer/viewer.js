@@ -3,7 +3,7 @@
 // surface, digital surface, wireframe and feature lines; colour modes with a legend; summary.
 // The URL fragment sets the state at load time (docs/viewer.md), e.g.
 //   page.html#layer=2&colour=deviation&wireframe=1&digital=1&surface=0&features=0
-//             &azimuth=30&elevation=20&up=+z&panels=0
+//             &azimuth=30&elevation=20&up=+z&panels=0&background=none
 (function () {
   'use strict';
 
@@ -332,15 +332,17 @@
 
   var canvasHolder = element('div', { id: 'dsreg-canvas' });
   document.body.appendChild(canvasHolder);
+  var transparent = options.background === 'none';  // for pictures: the mesh alone
   var renderer;
   try {
-    renderer = new THREE.WebGLRenderer({ antialias: true });
+    renderer = new THREE.WebGLRenderer({ antialias: true, alpha: transparent });
   } catch (error) {
     window.dsregRecordError('This page needs WebGL, which this browser does not provide (' + error.message + ').');
     return;
   }
   renderer.setPixelRatio(window.devicePixelRatio || 1);
-  renderer.setClearColor(0x1d2127);
+  renderer.setClearColor(0x1d2127, transparent ? 0 : 1);
+  if (transparent) root.classList.add('transparent');
   canvasHolder.appendChild(renderer.domElement);
 
   var scene = new THREE.Scene();
