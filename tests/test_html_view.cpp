@@ -20,15 +20,13 @@
 #include "dsreg/ambrosio_tortorelli.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/html_view.hpp"
+#include "test_support.hpp"
 
+namespace dsreg {
 namespace {
 
 namespace fs = std::filesystem;
-using dsreg::FaceMatrix;
-using dsreg::PointMatrix;
-using dsreg::PolygonMesh;
-using dsreg::ViewLayer;
-using dsreg::ViewPage;
+using test::error_message;
 
 /// Cube [0,2]³ moved by `offset`, 6 outward quads; vertex (x,y,z) has index x + 2y + 4z; u is the
 /// outward axis normal of each face.
@@ -122,18 +120,6 @@ struct Page {
         return values;
     }
 };
-
-std::string error_message(const std::function<void()>& action) {
-    try {
-        action();
-    } catch (const dsreg::Error& error) {
-        return error.what();
-    }
-    ADD_FAILURE() << "expected a dsreg::Error";
-    return "";
-}
-
-#define EXPECT_CONTAINS(text, part) EXPECT_NE(std::string(text).find(part), std::string::npos) << "text: " << (text)
 
 // ---- the fields the page colours by ----------------------------------------------------------
 
@@ -382,3 +368,4 @@ TEST(HtmlView, FailedWriteLeavesNoFileAndKeepsAnExistingOne) {
 }
 
 }  // namespace
+}  // namespace dsreg
