@@ -146,6 +146,10 @@ def run_checks(work):
     dsreg("regularize", "--shape", cube, "--box", "1.8", "--h", "0.1", "--radius", "0.3", "--normals", "at",
           "-o", path("cube.ply"), "--html", path("cube.html"))  # the page of a run
     dsreg("view", path("g.ply"), "--digital", path("g-digital.ply"), "-o", path("g.html"))
+    # A digital surface with other faces (triangles) than its mesh: no per-face values on it.
+    dsreg("regularize", "--shape", "goursat", "--h", "0.5", "--triangulate", "-o", path("gt.ply"),
+          "--input-mesh", path("gt-digital.obj"))
+    dsreg("view", path("g.ply"), "--digital", path("gt-digital.obj"), "-o", path("g-triangles.html"))
     names = ["géométrie 立方体.ply", "cube, copie №2.ply"]
     shutil.copy(path("g.ply"), path(names[0]))
     shutil.copy(path("cube.ply"), path(names[1]))
@@ -165,6 +169,7 @@ def run_checks(work):
         "displacement": (path("g.html"), fixed + "&colour=displacement"),
         "wireframe": (path("g.html"), fixed + "&wireframe=1"),
         "digital": (path("g.html"), fixed + "&surface=0&digital=1"),
+        "digital triangles": (path("g-triangles.html"), fixed + "&colour=deviation&digital=1&wireframe=1"),
         "cube plain": (path("cube.html"), fixed + "&features=0"),
         "cube features": (path("cube.html"), fixed + "&colour=features"),
         "labels": (path("labels.html"), "panels=0&azimuth=0&elevation=0&colour=labels"),

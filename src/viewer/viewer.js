@@ -125,7 +125,9 @@
   function fillColours(mode, view, colours, side) {
     var faces = view.faces, k = view.faceSize, faceCount = view.faceCount;
     var c, f, rgb;
-    if (mode.kind === 'plain') {
+    // A digital surface with other faces than its mesh has no per-face values: plain.
+    var missing = mode.kind === 'labels' ? !view.data.labels : mode.perFace && !view.data[mode.field];
+    if (mode.kind === 'plain' || missing) {
       rgb = plainColours[view.role];
       for (c = 0; c < colours.length; c += 3) { colours[c] = rgb[0]; colours[c + 1] = rgb[1]; colours[c + 2] = rgb[2]; }
       return;
