@@ -4,9 +4,9 @@
 #   scripts/install-deps.sh --dev    also the test and benchmark libraries
 #   scripts/install-deps.sh --fuzz   also clang with its sanitizer/libFuzzer runtimes and OpenMP
 #                                    (scripts/sanitize.sh, scripts/fuzz.sh); implies --dev
-#   scripts/install-deps.sh --viewer also headless Chromium and Python's PIL, which the tests of the
-#                                    HTML viewer and scripts/render.sh use to open pages and read
-#                                    their screenshots
+#   scripts/install-deps.sh --viewer also Chromium, which opens the HTML pages headless (the
+#                                    viewer's browser test, scripts/render.sh), and Python's PIL,
+#                                    with which the test reads the screenshots
 # libjs-three is a build dependency: three.js is inlined into dsreg's HTML pages (docs/viewer.md).
 set -euo pipefail
 packages=(build-essential cmake pkg-config libeigen3-dev libsuitesparse-dev libopenblas-dev zlib1g-dev

@@ -570,8 +570,7 @@
   function update() {
     var view = layers[state.layer - 1];
     layers.forEach(function (other) { other.group.visible = other === view; });
-    var mode = view.apply(state);
-    state.colour = mode.key;
+    var mode = view.apply(state);  // state.colour stays as asked, for layers that have it
     colourSelect.textContent = '';
     view.modes.forEach(function (m) {
       var option = element('option', { value: m.key, text: m.title });
