@@ -72,10 +72,6 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
     return result;
 }
 
-nlohmann::json energy_json(const EnergyTerms& e, const RegularizationWeights& w) {
-    return {{"data", e.data}, {"alignment", e.alignment}, {"fairness", e.fairness}, {"total", e.total(w)}};
-}
-
 nlohmann::json optional_json(const std::optional<double>& value) {
     return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
 }

@@ -27,6 +27,9 @@ void write_feature_lines(const std::string& path, const NormalFieldOptions& opti
 /// The report's "at" object: parameters, per-ε rounds, change of v, energy, time, solves.
 nlohmann::json at_report(const NormalFieldOptions& options, const NormalField& field, const DigitalSurface& surface);
 
+/// The report's energy object: the three terms of eq. (1) without their weights, and the total.
+nlohmann::json energy_json(const EnergyTerms& terms, const RegularizationWeights& weights);
+
 /// Fills the metric (W0, W2) and the local multipliers of `weights` for this surface and normal
 /// field, reading the maps or files, then validates the weights. Throws dsreg::Error.
 void apply_regularization_extensions(const RegularizationExtensions& options, const DigitalSurface& surface,
