@@ -209,28 +209,74 @@ TEST(ClampedRegularization, EveryVertexStaysInItsBox) {
     EXPECT_GT(r.clamp.clamped_vertices, 0);
 }
 
-TEST(ClampedRegularization, KktConditionsHoldToTheTolerance) {
-    const ShapeCase& c = sphere_case();
-    const ClampedRegularizationResult& r = sphere_result();
-    EXPECT_TRUE(r.clamp.qp.converged);
-    EXPECT_LE(r.clamp.qp.kkt_residual, default_clamp().qp.tolerance);
-    // Independent check: g = R x − b vanishes on free coordinates, points outward at bounds.
-    const VertexLinks links = vertex_links(c.surface.quads, c.surface.vertex_count());
-    const RegularizationSystem s =
-        assemble_regularization_system(c.surface.vertices, c.surface.quads, links, c.normals, RegularizationWeights{});
+/// Independent KKT check of a clamped result: g = R x − b (R assembled here) vanishes on the free
+/// coordinates and points outward at the bounds. Returns the worst violation relative to ‖b‖;
+/// `at_bounds` counts the coordinates on a bound.
+double kkt_violation(const DigitalSurface& surface, const PointMatrix& normals, const PointMatrix& positions, double half_width,
+                     std::int64_t& at_bounds) {
+    const VertexLinks links = vertex_links(surface.quads, surface.vertex_count());
+    const RegularizationSystem s = assemble_regularization_system(surface.vertices, surface.quads, links, normals, RegularizationWeights{});
     Eigen::VectorXd lower, upper;
-    clamp_bounds(c.surface, default_clamp().half_width, lower, upper);
-    const Eigen::VectorXd x = flatten_points(r.positions);
+    clamp_bounds(surface, half_width, lower, upper);
+    const Eigen::VectorXd x = flatten_points(positions);
     const Eigen::VectorXd g = s.matrix * x - s.rhs;
     double worst = 0;
-    std::int64_t at_bounds = 0;
+    at_bounds = 0;
     for (Eigen::Index q = 0; q < x.size(); ++q) {
         if (x[q] == lower[q]) ++at_bounds, worst = std::max(worst, -g[q]);
         else if (x[q] == upper[q]) ++at_bounds, worst = std::max(worst, g[q]);
         else worst = std::max(worst, std::abs(g[q]));
     }
+    return worst / s.rhs.norm();
+}
+
+TEST(ClampedRegularization, KktConditionsHoldToTheTolerance) {
+    const ShapeCase& c = sphere_case();
+    const ClampedRegularizationResult& r = sphere_result();
+    EXPECT_TRUE(r.clamp.qp.converged);
+    EXPECT_LE(r.clamp.qp.kkt_residual, default_clamp().qp.tolerance);
+    std::int64_t at_bounds = 0;
+    EXPECT_LT(kkt_violation(c.surface, c.normals, r.positions, default_clamp().half_width, at_bounds), 1e-10);
     EXPECT_GT(at_bounds, 0);
-    EXPECT_LT(worst, 1e-10 * s.rhs.norm());
+}
+
+/// A sphere of radius 9 and eight balls of radius 2 around it: one large component, eight small.
+BinaryVolume sphere_and_small_balls() {
+    return test::make_volume({30, 30, 30}, [](double i, double j, double k) {
+        if (Eigen::Vector3d(i - 14.5, j - 14.5, k - 14.5).norm() <= 9.0) return true;
+        for (double a : {3.0, 26.0})
+            for (double b : {3.0, 26.0})
+                for (double d : {3.0, 26.0})
+                    if (Eigen::Vector3d(i - a, j - b, k - d).norm() <= 2.0) return true;
+        return false;
+    });
+}
+
+TEST(ClampedRegularization, IterativeAndFactoredSolvesReachTheSameKktPoint) {
+    ShapeCase c;
+    c.volume = sphere_and_small_balls();
+    c.surface = extract_digital_surface(c.volume, Connectivity::TwentySix);
+    ASSERT_EQ(c.surface.component_count, 9);
+    c.normals = integral_invariant_normals(c.volume, c.surface, 3.0);
+    ClampOptions direct, iterative;
+    direct.solver.kind = SolverKind::Cholmod;
+    iterative.solver.kind = SolverKind::Amg;
+    const ClampedRegularizationResult a = regularize_clamped(c.surface, c.normals, RegularizationWeights{}, direct);
+    const ClampedRegularizationResult b = regularize_clamped(c.surface, c.normals, RegularizationWeights{}, iterative);
+    EXPECT_EQ(a.clamp.qp.cg_iterations, 0);
+    EXPECT_GT(b.clamp.qp.cg_iterations, 0) << "the large component must take the iterative path";
+    EXPECT_EQ(b.solve.solver, "amg");
+    for (const ClampedRegularizationResult* r : {&a, &b}) {
+        EXPECT_TRUE(r->clamp.qp.converged);
+        EXPECT_LE(r->clamp.qp.kkt_residual, direct.qp.tolerance);
+        EXPECT_GT(r->clamp.unclamped_vertices_outside, 0);
+        std::int64_t at_bounds = 0;
+        EXPECT_LT(kkt_violation(c.surface, c.normals, r->positions, direct.half_width, at_bounds), 1e-10);
+        EXPECT_GT(at_bounds, 0);
+        EXPECT_EQ(classify_voxel_centres(c.volume, r->positions, c.surface.quads).wrong(), 0);
+    }
+    // a strictly convex QP has one minimizer: both are within rounding of it
+    EXPECT_LT((a.positions - b.positions).cwiseAbs().maxCoeff(), 1e-6);
 }
 
 TEST(ClampedRegularization, EnergyIsBetweenUnclampedAndEveryFeasiblePointTried) {

@@ -35,6 +35,8 @@
 #include <Eigen/SparseCore>
 #include <cstdint>
 
+#include "dsreg/progress.hpp"
+
 namespace dsreg {
 
 struct BoxQpOptions {
@@ -56,6 +58,10 @@ struct BoxQpOptions {
     int active_set_max_iterations = 30;
     /// Projected Newton iterations of the fallback (one numeric factorization each).
     int newton_max_iterations = 100;
+    /// Called after each active set and Newton iteration (stage "clamp", fraction of the way from
+    /// the first KKT residual to the tolerance in log scale, detail "active set iteration 3, KKT
+    /// residual 2.1e-07"); from the calling thread, may throw to abandon the solve.
+    ProgressCallback progress;
 };
 
 struct BoxQpReport {
@@ -71,6 +77,7 @@ struct BoxQpReport {
     bool active_set_cycled = false;  ///< step 2 revisited an earlier active set (fallback used)
     int newton_iterations = 0;       ///< projected Newton fallback (0 when not needed)
     int factorizations = 0;          ///< numeric Cholesky factorizations (one symbolic analysis)
+    int cg_iterations = 0;           ///< conjugate gradient iterations of steps 2–3 (iterative solver, regularize_clamped)
     double admm_rho = 0;             ///< the ρ used
     double admm_seconds = 0;         ///< analysis (solve_box_qp) + ADMM
     double active_set_seconds = 0;   ///< steps 2 and 3

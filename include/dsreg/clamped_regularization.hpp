@@ -11,10 +11,14 @@
 // its side: re-digitizing the result gives back the input volume exactly, whatever the normal
 // field and the weights (docs/clamped.md; classify_voxel_centres measures it).
 //
-// Solved as a box-constrained convex QP (box_qp.hpp), every step with CHOLMOD on one symbolic
-// analysis of R: the unconstrained minimizer of R p* = α W0 p first (the answer if it is inside
-// the boxes), then ADMM on one factorization of R + ρI, then primal–dual active set iterations
-// to the requested KKT residual.
+// Solved as a box-constrained convex QP (box_qp.hpp), component by component (each component's
+// QP is independent, mesh_parts.hpp): the unconstrained minimizer of R p* = α W0 p first (the
+// answer where it is inside the boxes), then primal–dual active set iterations to the requested
+// KKT residual. Small components (and every one with --solver cholmod, or when `auto` would
+// factor) use CHOLMOD on one symbolic analysis of their R, with ADMM on one factorization of
+// R + ρI before the active set iterations. The others are solved without any factor: the
+// unconstrained minimizer by amg, each active set step by conjugate gradients on the free
+// coordinates preconditioned by the same multigrid hierarchy (docs/clamped.md).
 #pragma once
 
 #include <cstdint>
@@ -29,6 +33,11 @@ namespace dsreg {
 
 struct ClampOptions {
     BoxQpOptions qp;  ///< KKT tolerance, ADMM and active set limits
+    /// The solver of the unconstrained minimizer and how the components are solved: cholmod
+    /// factors every component, auto and amg (and cg, which means amg here) use the iterative
+    /// QP on components that auto would give to amg. Its progress callback sees the unconstrained
+    /// solve ("solve") and each active set iteration ("clamp").
+    SolverOptions solver;
     /// Half-width of each box, per axis, in units of that axis' spacing (> 0). ½ = the closed
     /// cube of the 8 voxel centres around the pointel, whose corners are voxel centres: the
     /// minimizer then often puts vertices exactly on voxel centres, making re-digitization
@@ -49,8 +58,8 @@ struct ClampReport {
 };
 
 /// A RegularizationResult (positions inside the boxes, energies before and after; `solve`
-/// describes the unconstrained CHOLMOD solve that started the QP: solver "cholmod", its
-/// relative residual and factor size) plus the clamp report.
+/// describes the unconstrained solve that started the QP, as regularize() reports it) plus the
+/// clamp report (KKT figures of the whole system; iterations of the largest component).
 struct ClampedRegularizationResult : RegularizationResult {
     ClampReport clamp;
     PointMatrix unclamped_positions;  ///< the unconstrained minimizer, for comparison

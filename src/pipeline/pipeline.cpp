@@ -62,6 +62,7 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
     SolverOptions solver;
     solver.kind = o.solver;
     solver.max_error_voxels = kDefaultMaxErrorVoxels;  // iterative solvers: within 5e-5 voxel of the exact answer
+    solver.progress = clock.progress();                // each iteration, as stage "solve" (and "clamp")
     result.regularization = run_regularization(o.extensions, loaded.volume, result.surface, result.field.normals,
                                                result.weights, solver, result.extension_report);
     clock.finish(result.regularization.solve.solver + ", relative residual " +

@@ -35,8 +35,8 @@ nlohmann::json energy_json(const EnergyTerms& terms, const RegularizationWeights
 void apply_regularization_extensions(const RegularizationExtensions& options, const DigitalSurface& surface,
                                      const PointMatrix& normals, RegularizationWeights& weights);
 
-/// regularize() with `solver`, or with --clamp regularize_clamped() (CHOLMOD throughout, whatever
-/// the --solver choice). `report` receives the JSON fields of the extensions: "metric",
+/// regularize() with `solver`, or with --clamp regularize_clamped() with the same solver choice.
+/// `report` receives the JSON fields of the extensions: "metric",
 /// "local_weights" and, with --clamp, "clamp" (KKT residual, constraint violation, iterations,
 /// unclamped comparison, voxel-centre classification of `volume`).
 RegularizationResult run_regularization(const RegularizationExtensions& options, const BinaryVolume& volume,

@@ -87,6 +87,7 @@ nlohmann::json clamp_json(const RegularizationExtensions& o, const ClampedRegula
             {"active_set_cycled", q.active_set_cycled},
             {"newton_iterations", q.newton_iterations},
             {"factorizations", q.factorizations},
+            {"cg_iterations", q.cg_iterations},
             {"factor_nonzeros", q.factor_nonzeros},
             {"seconds", {{"unclamped_solve", q.unconstrained_seconds},
                          {"admm", q.admm_seconds},
@@ -133,9 +134,11 @@ RegularizationResult run_regularization(const RegularizationExtensions& o, const
     report["local_weights"] = local_weights_json(o, weights);
     if (!o.clamp) return regularize(surface, normals, weights, solver);
 
-    ClampOptions clamp;  // CHOLMOD throughout: the --solver choice does not apply
+    ClampOptions clamp;
     clamp.qp.tolerance = o.clamp_tolerance;
+    clamp.qp.progress = solver.progress;
     clamp.half_width = o.clamp_half_width;
+    clamp.solver = solver;
     const ClampedRegularizationResult result = regularize_clamped(surface, normals, weights, clamp);
     const VoxelAgreement clamped = classify_voxel_centres(volume, result.positions, surface.quads);
     const VoxelAgreement unclamped = classify_voxel_centres(volume, result.unclamped_positions, surface.quads);

@@ -100,12 +100,17 @@ PartMesh extract_part(const MeshPart& part, const PointMatrix& positions, const 
 }
 
 Eigen::VectorXd gather_part(const MeshPart& part, const Eigen::VectorXd& x) {
+    if (part.whole) return x;
     Eigen::VectorXd local(3 * Eigen::Index(part.vertices.size()));
     for (std::size_t i = 0; i < part.vertices.size(); ++i) local.segment<3>(3 * Eigen::Index(i)) = x.segment<3>(3 * Eigen::Index(part.vertices[i]));
     return local;
 }
 
 void scatter_part(const MeshPart& part, const Eigen::VectorXd& local, Eigen::VectorXd& x) {
+    if (part.whole) {
+        x = local;
+        return;
+    }
     for (std::size_t i = 0; i < part.vertices.size(); ++i) x.segment<3>(3 * Eigen::Index(part.vertices[i])) = local.segment<3>(3 * Eigen::Index(i));
 }
 

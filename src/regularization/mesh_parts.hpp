@@ -16,9 +16,15 @@
 #include <vector>
 
 #include "dsreg/mesh.hpp"
+#include "dsreg/progress.hpp"
 #include "dsreg/regularization.hpp"
 
 namespace dsreg::detail {
+
+/// Components of at most this many vertices are solved directly, in batches of about
+/// kBatchVertices vertices: amg's coarsest level has 400 nodes, so amg would factor them anyway.
+constexpr std::int64_t kSmallComponentVertices = 400;
+constexpr std::int64_t kBatchVertices = 20000;
 
 struct MeshPart {
     std::vector<std::int32_t> vertices;  ///< global index of each local vertex, increasing
@@ -43,6 +49,33 @@ struct PartMesh {
 };
 PartMesh extract_part(const MeshPart& part, const PointMatrix& positions, const FaceMatrix& quads, const PointMatrix& normals,
                       const RegularizationWeights& weights);
+
+/// The mesh data of a part as the solvers see it: the whole mesh's own arrays when the part is the
+/// whole mesh (nothing copied), else those of extract_part.
+struct PartView {
+    const PointMatrix& positions;
+    const FaceMatrix& quads;
+    const PointMatrix& normals;
+    const RegularizationWeights& weights;
+};
+template <class Visit>
+void visit_part(const MeshPart& part, const PointMatrix& positions, const FaceMatrix& quads, const PointMatrix& normals,
+                const RegularizationWeights& weights, Visit visit) {
+    if (part.whole) {
+        visit(PartView{positions, quads, normals, weights});
+        return;
+    }
+    const PartMesh mesh = extract_part(part, positions, quads, normals, weights);
+    visit(PartView{mesh.positions, mesh.quads, mesh.normals, mesh.weights});
+}
+
+/// Progress of one part's solve mapped into [first, first + share] of the whole solve.
+inline ProgressCallback progress_share(const ProgressCallback& progress, double first, double share) {
+    if (!progress) return {};
+    return [=](const ProgressEvent& e) {
+        progress(ProgressEvent{e.stage, e.fraction < 0 ? -1.0 : first + share * e.fraction, e.detail});
+    };
+}
 
 /// x restricted to the part's vertices (interleaved), and written back.
 Eigen::VectorXd gather_part(const MeshPart& part, const Eigen::VectorXd& x);

@@ -4,7 +4,6 @@
 
 #include "dsreg/regularization.hpp"
 #include "mesh_parts.hpp"
-#include "regularization_operator.hpp"
 #include "spd_system.hpp"
 
 namespace dsreg {
@@ -14,24 +13,11 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-/// Components of at most this many vertices are solved directly, in batches of about
-/// kBatchVertices vertices: amg's coarsest level has 400 nodes, so amg would factor them anyway.
-constexpr std::int64_t kSmallComponentVertices = 400;
-constexpr std::int64_t kBatchVertices = 20000;
-
 /// The solver of a part: the batches of small components go to CHOLMOD whatever the choice.
 SolverOptions part_options(const SolverOptions& options, const detail::MeshPart& part) {
     SolverOptions o = options;
     if (part.small) o.kind = SolverKind::Cholmod;
     return o;
-}
-
-/// Progress of the part's solve mapped into [first, first + share] of the whole solve.
-ProgressCallback part_progress(const ProgressCallback& progress, double first, double share) {
-    if (!progress) return {};
-    return [=](const ProgressEvent& e) {
-        progress(ProgressEvent{e.stage, e.fraction < 0 ? -1.0 : first + share * e.fraction, e.detail});
-    };
 }
 
 /// The reports of the parts as one: the largest part's solver and work, the largest error bound
@@ -64,34 +50,12 @@ struct MergedReport {
         report.relative_residual = norm_b > 0 ? norm_r / norm_b : norm_r;
         if (small_components > 0) {
             const std::string note = std::to_string(small_components) + " small component" + (small_components > 1 ? "s" : "") +
-                                     " (at most " + std::to_string(kSmallComponentVertices) + " vertices) solved directly";
+                                     " (at most " + std::to_string(detail::kSmallComponentVertices) + " vertices) solved directly";
             report.note = report.note.empty() ? note : report.note + "; " + note;
         }
         return report;
     }
 };
-
-/// Solves R x = b of one part (x: warm start on entry), matrix-free unless CHOLMOD is needed.
-/// Adds the time to set up the operator (links, incidences, one pass over R's block rows) to
-/// `assembly_seconds`, the solver's to `solve_seconds`.
-SolveReport solve_part(const PointMatrix& positions, const FaceMatrix& quads, const PointMatrix& normals,
-                       const RegularizationWeights& weights, const SolverOptions& options, Eigen::VectorXd& x,
-                       double& residual_norm, double& rhs_norm, RegularizationResult& times) {
-    auto started = Clock::now();
-    const std::int64_t n = positions.rows();
-    const VertexLinks links = vertex_links(quads, n);
-    const detail::RegularizationOperator R(quads, links, normals, weights, n);
-    Eigen::VectorXd b(3 * n);
-    for (std::int64_t i = 0; i < n; ++i) b.segment<3>(3 * i) = (weights.alpha * detail::data_weight(weights, i)) * positions.row(i).transpose();
-    const detail::OperatorSystem system(R, smallest_eigenvalue_bound(weights, n));
-    times.assembly_seconds += seconds_since(started);
-    started = Clock::now();
-    const SolveReport report = detail::solve_system(system, b, x, options);
-    times.solve_seconds += seconds_since(started);
-    rhs_norm = b.norm();
-    residual_norm = report.relative_residual * (rhs_norm > 0 ? rhs_norm : 1.0);
-    return report;
-}
 
 }  // namespace
 
@@ -102,13 +66,10 @@ RegularizationResult regularize(const DigitalSurface& surface, const PointMatrix
     if (normals.rows() != surface.face_count())
         throw Error("normal field has " + std::to_string(normals.rows()) + " vectors for " + std::to_string(surface.face_count()) + " faces");
     RegularizationResult result;
-    SolverOptions options = solver;
-    if (!(options.smallest_eigenvalue > 0)) options.smallest_eigenvalue = smallest_eigenvalue_bound(weights, n);
-    if (options.max_error == 0 && options.max_error_voxels > 0)
-        options.max_error = options.max_error_voxels * surface.grid.spacing.minCoeff();
+    const SolverOptions options = detail::completed_options(solver, weights, n, surface.grid.spacing.minCoeff());
 
     auto started = Clock::now();
-    const std::vector<detail::MeshPart> parts = detail::mesh_parts(surface.quads, n, kSmallComponentVertices, kBatchVertices);
+    const std::vector<detail::MeshPart> parts = detail::mesh_parts(surface.quads, n, detail::kSmallComponentVertices, detail::kBatchVertices);
     result.assembly_seconds = seconds_since(started);
     Eigen::VectorXd x = flatten_points(surface.vertices);  // warm start at p
     MergedReport merged;
@@ -116,20 +77,19 @@ RegularizationResult regularize(const DigitalSurface& surface, const PointMatrix
     for (const detail::MeshPart& part : parts) {
         SolverOptions o = part_options(options, part);
         const double share = double(part.vertices.size()) / double(std::max<std::int64_t>(n, 1));
-        o.progress = part_progress(options.progress, done, share);
-        double residual_norm = 0, rhs_norm = 0;
-        SolveReport r;
-        if (part.whole) {
-            r = solve_part(surface.vertices, surface.quads, normals, weights, o, x, residual_norm, rhs_norm, result);
-        } else {
+        o.progress = detail::progress_share(options.progress, done, share);
+        detail::visit_part(part, surface.vertices, surface.quads, normals, weights, [&](const detail::PartView& mesh) {
             started = Clock::now();
-            const detail::PartMesh mesh = detail::extract_part(part, surface.vertices, surface.quads, normals, weights);
             Eigen::VectorXd local = detail::gather_part(part, x);
+            const detail::MeshSystem system(mesh.positions, mesh.quads, mesh.normals, mesh.weights);
             result.assembly_seconds += seconds_since(started);
-            r = solve_part(mesh.positions, mesh.quads, mesh.normals, mesh.weights, o, local, residual_norm, rhs_norm, result);
+            started = Clock::now();
+            const SolveReport r = detail::solve_system(system.system(), system.rhs(), local, o);
+            result.solve_seconds += seconds_since(started);
             detail::scatter_part(part, local, x);
-        }
-        merged.add(r, part, residual_norm, rhs_norm);
+            const double rhs_norm = system.rhs().norm();
+            merged.add(r, part, r.relative_residual * (rhs_norm > 0 ? rhs_norm : 1.0), rhs_norm);
+        });
         done += share;
     }
     result.solve = merged.finish();

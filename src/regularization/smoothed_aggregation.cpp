@@ -20,7 +20,7 @@ struct SmoothedAggregation<Scalar>::Level {
     std::vector<typename Matrix::Block> inverse_diagonal;
     double lambda_max = 0;  ///< upper estimate of the largest eigenvalue of D⁻¹A (Lanczos)
     Matrix prolongator;     ///< P: next coarser level → this level
-    mutable Eigen::VectorXd residual, direction, preconditioned, coarse_rhs, coarse_solution;
+    mutable Eigen::VectorXd residual, direction, preconditioned, coarse_rhs, coarse_solution, masked;
     mutable std::vector<Eigen::VectorXd> restriction_scratch;  ///< Pᵀ r: one accumulator per thread
 };
 
@@ -432,26 +432,82 @@ template <class Scalar>
 void SmoothedAggregation<Scalar>::apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const { vcycle(0, r, z); }
 
 template <class Scalar>
+void SmoothedAggregation<Scalar>::hold(const std::vector<bool>& held) {
+    held_.clear();
+    held_inverse_diagonal_.clear();
+    if (std::find(held.begin(), held.end(), true) == held.end()) return;
+    const Level& L = *levels_.front();
+    held_.assign(held.begin(), held.end());
+    // The diagonal blocks of A_held: the held rows and columns of each block replaced by their
+    // diagonal entries.
+    std::vector<Eigen::Matrix3d> blocks = diagonal_blocks(L.op);
+    held_diagonal_.resize(3 * L.nodes);
+    for (std::int64_t i = 0; i < L.nodes; ++i)
+        for (int d = 0; d < 3; ++d) {
+            held_diagonal_[3 * i + d] = blocks[std::size_t(i)](d, d);
+            if (!held_[std::size_t(3 * i + d)]) continue;
+            const double diagonal = blocks[std::size_t(i)](d, d);
+            blocks[std::size_t(i)].row(d).setZero();
+            blocks[std::size_t(i)].col(d).setZero();
+            blocks[std::size_t(i)](d, d) = diagonal;
+        }
+    const std::vector<Eigen::Matrix3d> inverse = inverted(blocks);
+    held_inverse_diagonal_.resize(inverse.size());
+    for (std::size_t i = 0; i < inverse.size(); ++i) held_inverse_diagonal_[i] = inverse[i].template cast<Scalar>();
+}
+
+template <class Scalar>
+void SmoothedAggregation<Scalar>::mask_held(Eigen::VectorXd& v) const {
+#pragma omp parallel for schedule(static) if (v.size() >= 3 * kParallelMinRows)
+    for (Eigen::Index q = 0; q < v.size(); ++q)
+        if (held_[std::size_t(q)]) v[q] = 0;
+}
+
+template <class Scalar>
+void SmoothedAggregation<Scalar>::multiply_level(std::size_t index, const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+    const Level& L = *levels_[index];
+    if (index > 0 || held_.empty()) {
+        L.op.multiply(x, y);
+        return;
+    }
+    // A_held x: A on the free coordinates, the diagonal on the held ones.
+    Eigen::VectorXd& free = L.masked;
+    free = x;
+    mask_held(free);
+    L.op.multiply(free, y);
+#pragma omp parallel for schedule(static) if (y.size() >= 3 * kParallelMinRows)
+    for (Eigen::Index q = 0; q < y.size(); ++q)
+        if (held_[std::size_t(q)]) y[q] = held_diagonal_[q] * x[q];
+}
+
+template <class Scalar>
 void SmoothedAggregation<Scalar>::vcycle(std::size_t index, const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
     const Level& L = *levels_[index];
     if (index + 1 == levels_.size()) {
         x = coarsest_->cholesky.solve(b);
         return;
     }
-    smooth(L, b, x, true);
-    L.op.multiply(x, L.residual);
+    const bool holding = index == 0 && !held_.empty();
+    smooth(index, b, x, true);
+    multiply_level(index, x, L.residual);
     L.residual = b - L.residual;
+    if (holding) mask_held(L.residual);  // the coarse correction acts on the free coordinates only
     L.prolongator.multiply_transposed(L.residual, L.coarse_rhs, L.restriction_scratch);
     vcycle(index + 1, L.coarse_rhs, L.coarse_solution);
     L.prolongator.multiply(L.coarse_solution, L.residual);
+    if (holding) mask_held(L.residual);
     x += L.residual;
-    smooth(L, b, x, false);
+    smooth(index, b, x, false);
 }
 
 /// Chebyshev iteration on D⁻¹A over [λmax/range, λmax] (Saad, Iterative Methods, alg. 12.1): a
-/// fixed polynomial, so the V-cycle stays symmetric with the same pre- and post-smoother.
+/// fixed polynomial, so the V-cycle stays symmetric with the same pre- and post-smoother. With
+/// held coordinates, on A_held (λmax(D⁻¹A) bounds its spectrum too: its free block is a principal
+/// block of the pencil (A, D), its held block the identity).
 template <class Scalar>
-void SmoothedAggregation<Scalar>::smooth(const Level& L, const Eigen::VectorXd& b, Eigen::VectorXd& x, bool zero_guess) const {
+void SmoothedAggregation<Scalar>::smooth(std::size_t index, const Eigen::VectorXd& b, Eigen::VectorXd& x, bool zero_guess) const {
+    const Level& L = *levels_[index];
+    const auto& inverse_diagonal = index == 0 && !held_.empty() ? held_inverse_diagonal_ : L.inverse_diagonal;
     const double upper = settings_.smoothing_safety * L.lambda_max, lower = upper / settings_.smoothing_range;
     const double theta = 0.5 * (upper + lower), delta = 0.5 * (upper - lower), sigma = theta / delta;
     double rho = 1 / sigma;
@@ -459,17 +515,17 @@ void SmoothedAggregation<Scalar>::smooth(const Level& L, const Eigen::VectorXd& 
         x.setZero(b.size());
         L.residual = b;
     } else {
-        L.op.multiply(x, L.residual);
+        multiply_level(index, x, L.residual);
         L.residual = b - L.residual;
     }
-    apply_block_diagonal(L.inverse_diagonal, L.residual, L.preconditioned);
+    apply_block_diagonal(inverse_diagonal, L.residual, L.preconditioned);
     L.direction = L.preconditioned / theta;
     for (int k = 1;; ++k) {
         x += L.direction;
         if (k == settings_.smoothing_degree) break;
-        L.op.multiply(L.direction, L.preconditioned);
+        multiply_level(index, L.direction, L.preconditioned);
         L.residual -= L.preconditioned;
-        apply_block_diagonal(L.inverse_diagonal, L.residual, L.preconditioned);
+        apply_block_diagonal(inverse_diagonal, L.residual, L.preconditioned);
         const double rho_next = 1 / (2 * sigma - rho);
         L.direction = (rho_next * rho) * L.direction + (2 * rho_next / delta) * L.preconditioned;
         rho = rho_next;

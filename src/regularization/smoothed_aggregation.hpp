@@ -66,6 +66,13 @@ public:
     virtual int level_count() const = 0;
     /// Σ over levels of the operator's stored scalar entries / entries of R.
     virtual double operator_complexity() const = 0;
+    /// Makes apply() a preconditioner of A_held (A with the rows and columns of the held
+    /// coordinates replaced by their diagonal entries; all false: A again): the finest level's
+    /// operator and block diagonal are masked and the coarse correction acts on the free
+    /// coordinates only, the coarser levels stay those of A. The V-cycle stays symmetric
+    /// positive definite (any SPD coarse operators give an SPD V-cycle) and never couples free
+    /// and held coordinates.
+    virtual void hold(const std::vector<bool>& held) = 0;
 };
 
 /// The hierarchy with its matrices stored in Scalar (float or double).
@@ -85,6 +92,7 @@ public:
     void apply(const Eigen::VectorXd& r, Eigen::VectorXd& z) const override;
     int level_count() const override;
     double operator_complexity() const override;
+    void hold(const std::vector<bool>& held) override;
 
 private:
     struct Level;
@@ -94,12 +102,17 @@ private:
                                               const StrengthGraph& strong, std::int64_t& count) const;
     void factor_coarsest(const Eigen::SparseMatrix<double>& matrix);
     void vcycle(std::size_t level, const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
-    void smooth(const Level& level, const Eigen::VectorXd& b, Eigen::VectorXd& x, bool zero_guess) const;
+    void smooth(std::size_t level, const Eigen::VectorXd& b, Eigen::VectorXd& x, bool zero_guess) const;
+    void multiply_level(std::size_t level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+    void mask_held(Eigen::VectorXd& v) const;
 
     AmgSettings settings_;
     double fine_nonzeros_ = 0;
     std::vector<std::unique_ptr<Level>> levels_;
     std::unique_ptr<Coarsest> coarsest_;
+    std::vector<char> held_;  ///< per coordinate of the finest level; empty: nothing held
+    Eigen::VectorXd held_diagonal_;
+    std::vector<typename Matrix::Block> held_inverse_diagonal_;
 };
 
 /// The hierarchy in float when `data_weight_ratio` (SpdSystem::data_weight_ratio) allows it

@@ -132,15 +132,7 @@ SolveReport solve_block_jacobi_cg(const detail::SpdSystem& system, const Eigen::
 /// unspecified) if the tolerance is not met within `max_iterations`.
 bool solve_amg(const detail::SpdSystem& system, const Eigen::VectorXd& b, Eigen::VectorXd& x,
                const SolverOptions& options, int max_iterations, SolveReport& report) {
-    const std::unique_ptr<detail::Multigrid> amg = system.multigrid(detail::AmgSettings{});
-    const detail::Preconditioner vcycle = [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) { amg->apply(r, z); };
-    const detail::CgResult cg = detail::preconditioned_conjugate_gradient(
-        product(system), system.infinity_norm(), b, x, vcycle, stop_rule(options, max_iterations, "amg"));
-    report.solver = "amg";
-    report.iterations = cg.iterations;
-    report.multigrid_levels = amg->level_count();
-    report.operator_complexity = amg->operator_complexity();
-    return cg.converged;
+    return detail::solve_with_multigrid(system, *system.multigrid(detail::AmgSettings{}), b, x, options, max_iterations, report);
 }
 
 SolveReport solve_auto(const detail::SpdSystem& system, const Eigen::VectorXd& b, Eigen::VectorXd& x,
@@ -198,6 +190,18 @@ std::string solver_name(SolverKind kind) {
 std::vector<std::string> solver_names() { return {"cholmod", "auto", "amg", "cg"}; }
 
 namespace detail {
+
+bool solve_with_multigrid(const SpdSystem& system, const Multigrid& amg, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+                          const SolverOptions& options, int max_iterations, SolveReport& report) {
+    const Preconditioner vcycle = [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) { amg.apply(r, z); };
+    const CgResult cg = preconditioned_conjugate_gradient(product(system), system.infinity_norm(), b, x, vcycle,
+                                                          stop_rule(options, max_iterations, "amg"));
+    report.solver = "amg";
+    report.iterations = cg.iterations;
+    report.multigrid_levels = amg.level_count();
+    report.operator_complexity = amg.operator_complexity();
+    return cg.converged;
+}
 
 SolveReport solve_system(const SpdSystem& system, const Eigen::VectorXd& b, Eigen::VectorXd& x, const SolverOptions& options) {
     if (system.unknowns() != b.size()) throw Error("solve_spd: inconsistent system sizes");

@@ -54,4 +54,30 @@ const Eigen::SparseMatrix<double>& OperatorSystem::matrix() const {
     return *assembled_;
 }
 
+namespace {
+
+Eigen::VectorXd data_rhs(const PointMatrix& positions, const RegularizationWeights& weights) {
+    Eigen::VectorXd b(3 * positions.rows());
+    for (Eigen::Index i = 0; i < positions.rows(); ++i)
+        b.segment<3>(3 * i) = (weights.alpha * data_weight(weights, i)) * positions.row(i).transpose();
+    return b;
+}
+
+}  // namespace
+
+SolverOptions completed_options(const SolverOptions& options, const RegularizationWeights& weights, std::int64_t vertex_count,
+                                double smallest_spacing) {
+    SolverOptions o = options;
+    if (!(o.smallest_eigenvalue > 0)) o.smallest_eigenvalue = smallest_eigenvalue_bound(weights, vertex_count);
+    if (o.max_error == 0 && o.max_error_voxels > 0) o.max_error = o.max_error_voxels * smallest_spacing;
+    return o;
+}
+
+MeshSystem::MeshSystem(const PointMatrix& positions, const FaceMatrix& quads, const PointMatrix& normals,
+                       const RegularizationWeights& weights)
+    : links_(vertex_links(quads, positions.rows())),
+      operator_(quads, links_, normals, weights, positions.rows()),
+      rhs_(data_rhs(positions, weights)),
+      system_(operator_, smallest_eigenvalue_bound(weights, positions.rows())) {}
+
 }  // namespace dsreg::detail

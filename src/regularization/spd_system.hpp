@@ -76,4 +76,33 @@ private:
 /// solve_spd() for either kind of system (the report's residual and error bound included).
 SolveReport solve_system(const SpdSystem& system, const Eigen::VectorXd& b, Eigen::VectorXd& x, const SolverOptions& options);
 
+/// CG preconditioned by one V-cycle of `amg` (a hierarchy of R), with the stop of `options`; fills
+/// the report's solver, iterations and hierarchy figures (not the residual). False if it did not
+/// converge within max_iterations.
+bool solve_with_multigrid(const SpdSystem& system, const Multigrid& amg, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+                          const SolverOptions& options, int max_iterations, SolveReport& report);
+
+/// The options with what regularize() fills in: the smallest eigenvalue bound α·min α_i w0_i
+/// (if not given) and max_error from max_error_voxels and the smallest voxel side.
+SolverOptions completed_options(const SolverOptions& options, const RegularizationWeights& weights, std::int64_t vertex_count,
+                                double smallest_spacing);
+
+/// R x = b of eq. (22–23) for one mesh, matrix-free: its links, the operator, the right-hand side
+/// α W0_α p. The mesh data must outlive it.
+class MeshSystem {
+public:
+    MeshSystem(const PointMatrix& positions, const FaceMatrix& quads, const PointMatrix& normals,
+               const RegularizationWeights& weights);
+    MeshSystem(const MeshSystem&) = delete;
+    MeshSystem& operator=(const MeshSystem&) = delete;
+    const OperatorSystem& system() const { return system_; }
+    const Eigen::VectorXd& rhs() const { return rhs_; }
+
+private:
+    VertexLinks links_;
+    RegularizationOperator operator_;
+    Eigen::VectorXd rhs_;
+    OperatorSystem system_;
+};
+
 }  // namespace dsreg::detail
