@@ -1,0 +1,218 @@
+// dsreg — NRRD images: .nrrd (data attached after the header) and .nhdr (detached data file).
+//
+// Header: the magic line "NRRD000N", then "field: value" lines ('#' comments, "key:=value" pairs
+// ignored) ended by a blank line (attached data follows) or the end of the file (.nhdr). dsreg
+// parses what locates and types the payload (type, dimension, sizes, encoding, endian, data file,
+// line skip, byte skip) and checks it against the file before anything else reads it; ITK's
+// NrrdImageIO then reads the header for the geometry (space, space directions, space origin,
+// kinds), and must agree with dsreg on the sizes and the value type. The payload (raw or gzip
+// encoding) is decoded here as it streams from the file. Not supported: ascii, hex and bzip2
+// encodings, and data split over several files.
+#include <filesystem>
+#include <map>
+#include <memory>
+
+#include "dsreg/volume_io.hpp"
+#include "image_geometry.hpp"
+#include "itk_bridge.hpp"
+#include "text_header.hpp"
+#include "volume_io_internal.hpp"
+
+namespace dsreg::volume_io_detail {
+
+namespace {
+
+/// Generous: a header is a few hundred bytes; long "space directions" or comments stay far below.
+constexpr std::uint64_t kMaxHeaderBytes = 1 << 20;
+
+struct NrrdHeader {
+    std::vector<std::int64_t> sizes;
+    SampleFormat sample;
+    std::string value_type;
+    bool gzip = false;
+    std::string data_file;  ///< empty: attached
+    std::int64_t line_skip = 0;
+    std::int64_t byte_skip = 0;
+};
+
+using Fields = std::map<std::string, std::string>;
+
+/// Field names are compared without case and without spaces ("byte skip" = "byteskip").
+std::string field_key(const std::string& name) {
+    std::string key;
+    for (const char c : to_lower(trim(name)))
+        if (c != ' ') key.push_back(c);
+    return key;
+}
+
+Fields read_fields(InputFile& file) {
+    std::string line;
+    if (!read_header_line(file, line, kMaxHeaderBytes) || line.size() != 8 || line.compare(0, 7, "NRRD000") != 0 ||
+        line[7] < '1' || line[7] > '5')
+        file.fail("not a NRRD file: the first line is " + quote_excerpt(line) + ", not the magic NRRD0001 ... NRRD0005");
+    Fields fields;
+    for (int line_number = 2; read_header_line(file, line, kMaxHeaderBytes); ++line_number) {
+        if (trim(line).empty()) break;  // attached data follows
+        if (line[0] == '#') continue;
+        const std::size_t colon = line.find(": ");
+        if (line.find(":=") != std::string::npos && (colon == std::string::npos || line.find(":=") < colon)) continue;
+        if (colon == std::string::npos)
+            file.fail("header line " + std::to_string(line_number) + " is not 'field: value': " + quote_excerpt(line));
+        const std::string key = field_key(line.substr(0, colon));
+        if (!fields.emplace(key, trim(line.substr(colon + 2))).second)
+            file.fail("field '" + key + "' appears twice (line " + std::to_string(line_number) + ")");
+    }
+    return fields;
+}
+
+const std::string& required(const InputFile& file, const Fields& fields, const std::string& key) {
+    const auto found = fields.find(key);
+    if (found == fields.end()) file.fail("missing required field '" + key + "'");
+    return found->second;
+}
+
+SampleFormat nrrd_type(const InputFile& file, const std::string& name) {
+    static const std::map<std::string, std::pair<int, SampleKind>> types = {
+        {"signed char", {1, SampleKind::Signed}},         {"int8", {1, SampleKind::Signed}},
+        {"int8_t", {1, SampleKind::Signed}},              {"uchar", {1, SampleKind::Unsigned}},
+        {"unsigned char", {1, SampleKind::Unsigned}},     {"uint8", {1, SampleKind::Unsigned}},
+        {"uint8_t", {1, SampleKind::Unsigned}},           {"short", {2, SampleKind::Signed}},
+        {"short int", {2, SampleKind::Signed}},           {"signed short", {2, SampleKind::Signed}},
+        {"signed short int", {2, SampleKind::Signed}},    {"int16", {2, SampleKind::Signed}},
+        {"int16_t", {2, SampleKind::Signed}},             {"ushort", {2, SampleKind::Unsigned}},
+        {"unsigned short", {2, SampleKind::Unsigned}},    {"unsigned short int", {2, SampleKind::Unsigned}},
+        {"uint16", {2, SampleKind::Unsigned}},            {"uint16_t", {2, SampleKind::Unsigned}},
+        {"int", {4, SampleKind::Signed}},                 {"signed int", {4, SampleKind::Signed}},
+        {"int32", {4, SampleKind::Signed}},               {"int32_t", {4, SampleKind::Signed}},
+        {"uint", {4, SampleKind::Unsigned}},              {"unsigned int", {4, SampleKind::Unsigned}},
+        {"uint32", {4, SampleKind::Unsigned}},            {"uint32_t", {4, SampleKind::Unsigned}},
+        {"longlong", {8, SampleKind::Signed}},            {"long long", {8, SampleKind::Signed}},
+        {"long long int", {8, SampleKind::Signed}},       {"signed long long", {8, SampleKind::Signed}},
+        {"signed long long int", {8, SampleKind::Signed}}, {"int64", {8, SampleKind::Signed}},
+        {"int64_t", {8, SampleKind::Signed}},             {"ulonglong", {8, SampleKind::Unsigned}},
+        {"unsigned long long", {8, SampleKind::Unsigned}}, {"unsigned long long int", {8, SampleKind::Unsigned}},
+        {"uint64", {8, SampleKind::Unsigned}},            {"uint64_t", {8, SampleKind::Unsigned}},
+        {"float", {4, SampleKind::Float}},                {"double", {8, SampleKind::Float}},
+    };
+    const auto found = types.find(to_lower(name));
+    if (found == types.end()) file.fail("unsupported value type " + quote_excerpt(name));
+    return SampleFormat{found->second.first, found->second.second, false};
+}
+
+std::int64_t integer_field(const InputFile& file, const Fields& fields, const std::string& key, std::int64_t fallback) {
+    const auto found = fields.find(key);
+    if (found == fields.end()) return fallback;
+    std::int64_t value = 0;
+    if (!parse_integer(found->second, value)) file.fail("field '" + key + "': " + quote_excerpt(found->second) + " is not an integer");
+    return value;
+}
+
+NrrdHeader parse_header(InputFile& file) {
+    const Fields fields = read_fields(file);
+    NrrdHeader header;
+    header.sample = nrrd_type(file, required(file, fields, "type"));
+    header.value_type = sample_type_name(header.sample);
+
+    const std::string& dimension_text = required(file, fields, "dimension");
+    std::int64_t dimension = 0;
+    if (!parse_positive_integer(dimension_text, dimension) || dimension > 16)
+        file.fail("field 'dimension': " + quote_excerpt(dimension_text) + " is not a number of dimensions (1 to 16)");
+    const std::vector<std::string> sizes = split_words(required(file, fields, "sizes"));
+    if (static_cast<std::int64_t>(sizes.size()) != dimension)
+        file.fail("field 'sizes' gives " + std::to_string(sizes.size()) + " sizes for dimension " + std::to_string(dimension));
+    for (const std::string& size : sizes) {
+        std::int64_t value = 0;
+        if (!parse_positive_integer(size, value)) file.fail("field 'sizes': " + quote_excerpt(size) + " is not a positive integer");
+        header.sizes.push_back(value);
+    }
+
+    const std::string encoding = to_lower(required(file, fields, "encoding"));
+    if (encoding == "gzip" || encoding == "gz")
+        header.gzip = true;
+    else if (encoding != "raw")
+        file.fail("encoding '" + encoding + "' is not supported (dsreg reads the raw and gzip encodings)");
+
+    if (header.sample.bytes > 1) {
+        const std::string endian = to_lower(required(file, fields, "endian"));
+        if (endian != "little" && endian != "big") file.fail("field 'endian': " + quote_excerpt(endian) + " is neither little nor big");
+        header.sample.big_endian = endian == "big";
+    }
+
+    const auto data_file = fields.find("datafile");
+    if (data_file != fields.end()) {
+        header.data_file = data_file->second;
+        if (header.data_file.empty()) file.fail("field 'data file' is empty");
+        if (header.data_file.rfind("LIST", 0) == 0 || header.data_file.find('%') != std::string::npos)
+            file.fail("data split over several files ('data file: " + quote_excerpt(header.data_file) + "') is not supported");
+    }
+    header.line_skip = integer_field(file, fields, "lineskip", 0);
+    header.byte_skip = integer_field(file, fields, "byteskip", 0);
+    if (header.line_skip < 0) file.fail("field 'line skip' is negative");
+    if (header.byte_skip < -1) file.fail("field 'byte skip' must be -1 (data at the end of the file) or at least 0");
+    if (header.byte_skip == -1 && header.gzip) file.fail("'byte skip: -1' is only meaningful with the raw encoding");
+    return header;
+}
+
+/// ITK must read the same number of values of the same type as dsreg's parse says.
+void check_itk_agrees(const std::string& path, const NrrdHeader& header, const ImageHeader& itk) {
+    std::int64_t nrrd_values = 1, itk_values = itk.components;
+    for (const std::int64_t size : header.sizes) nrrd_values *= size;
+    for (const std::int64_t size : itk.sizes) itk_values *= size;
+    if (nrrd_values != itk_values)
+        fail(path, "ITK reads " + std::to_string(itk_values) + " values, the header's sizes give " + std::to_string(nrrd_values));
+    if (itk.value_type_supported && (itk.sample.bytes != header.sample.bytes || itk.sample.kind != header.sample.kind))
+        fail(path, "ITK reads the values as " + itk.value_type + ", the header says " + header.value_type);
+}
+
+}  // namespace
+
+void read_nrrd_voxels(const std::string& path, const VolumeLimits& limits, VoxelDestination& destination) {
+    InputFile file(path);
+    const NrrdHeader header = parse_header(file);
+    std::unique_ptr<InputFile> detached;
+    if (!header.data_file.empty()) {
+        const std::string data_path = path_beside(path, header.data_file);
+        if (!std::filesystem::exists(data_path)) fail(path, "its data file " + data_path + " does not exist");
+        detached = std::make_unique<InputFile>(data_path);
+    }
+    InputFile& data = detached ? *detached : file;
+
+    // The header as ITK reads it: dims (4-D and vector images rejected), geometry.
+    const ImageHeader itk = read_itk_header(path, ItkFormat::Nrrd);
+    check_itk_agrees(path, header, itk);
+    const Index3 dims = image_dims(path, itk);
+    const std::int64_t voxels = checked_voxel_count(path, dims, limits);
+    const std::uint64_t bytes = payload_bytes(path, voxels, header.sample.bytes);
+    const std::string description = "header says " + describe_payload(dims, voxels, header.sample.bytes);
+
+    skip_lines(data, header.line_skip, "line skip");
+    if (!header.gzip) {
+        if (header.byte_skip == -1) {
+            if (data.remaining() < bytes) data.fail("truncated payload: " + description + ", file holds " + std::to_string(data.size()) + " bytes");
+            data.skip(data.remaining() - bytes);
+        } else {
+            data.skip(static_cast<std::uint64_t>(header.byte_skip));
+        }
+        if (data.remaining() < bytes)
+            data.fail("truncated payload: " + description + ", file holds " + std::to_string(data.remaining()) +
+                      " bytes after the header");
+    } else if (bytes + static_cast<std::uint64_t>(header.byte_skip) > max_inflated_size(data.remaining())) {
+        data.fail("truncated or lying header: " + description + ", but the " + std::to_string(data.remaining()) +
+                  "-byte gzip payload can inflate to at most " + std::to_string(max_inflated_size(data.remaining())) + " bytes");
+    }
+
+    VolumeFileInfo info;
+    info.format = "NRRD";
+    info.value_type = header.value_type;
+    const VoxelGrid geometry = image_geometry(path, itk, info);
+    destination.allocate(path, dims);
+    destination.set_geometry(geometry);
+    destination.info() = info;
+    SampleWriter sink = destination.writer(data.path(), header.sample);
+    if (!header.gzip) return decode_stored_prefix(data, sink);
+    InflateStream stream(data, CompressedContainer::Gzip);
+    stream.skip(static_cast<std::uint64_t>(header.byte_skip), description);
+    stream.decode(bytes, sink, description);
+}
+
+}  // namespace dsreg::volume_io_detail

@@ -1,0 +1,86 @@
+#include "text_header.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+#include <limits>
+
+namespace dsreg::volume_io_detail {
+
+std::string trim(const std::string& text) {
+    const char* spaces = " \t\r";
+    const std::size_t first = text.find_first_not_of(spaces);
+    if (first == std::string::npos) return "";
+    return text.substr(first, text.find_last_not_of(spaces) - first + 1);
+}
+
+std::string to_lower(std::string text) {
+    std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return text;
+}
+
+bool read_header_line(InputFile& file, std::string& line, std::uint64_t max_header_bytes) {
+    line.clear();
+    bool any = false;
+    for (int c = file.get(); c != -1; c = file.get()) {
+        any = true;
+        if (c == '\n') break;
+        if (file.position() > max_header_bytes)
+            file.fail("the header does not end within its first " + std::to_string(max_header_bytes) + " bytes");
+        line.push_back(static_cast<char>(c));
+    }
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    return any;
+}
+
+std::vector<std::string> split_words(const std::string& text) {
+    std::vector<std::string> words;
+    std::string word;
+    for (const char c : text) {
+        if (c == ' ' || c == '\t' || c == '\r' || c == '\n') {
+            if (!word.empty()) words.push_back(word);
+            word.clear();
+        } else {
+            word.push_back(c);
+        }
+    }
+    if (!word.empty()) words.push_back(word);
+    return words;
+}
+
+bool parse_integer(const std::string& text, std::int64_t& value) {
+    std::size_t start = 0;
+    bool negative = false;
+    if (!text.empty() && (text[0] == '-' || text[0] == '+')) {
+        negative = text[0] == '-';
+        start = 1;
+    }
+    if (start >= text.size()) return false;
+    std::int64_t result = 0;
+    for (std::size_t i = start; i < text.size(); ++i) {
+        const char c = text[i];
+        if (c < '0' || c > '9') return false;
+        const int digit = c - '0';
+        if (result > (std::numeric_limits<std::int64_t>::max() - digit) / 10) return false;
+        result = result * 10 + digit;
+    }
+    value = negative ? -result : result;
+    return true;
+}
+
+void skip_lines(InputFile& file, std::int64_t count, const std::string& field) {
+    for (std::int64_t line = 0; line < count; ++line) {
+        int c = file.get();
+        while (c != -1 && c != '\n') c = file.get();
+        if (c == -1)
+            file.fail("the data ends before the " + std::to_string(count) + " lines that '" + field + "' says to skip");
+    }
+}
+
+std::string path_beside(const std::string& header_path, const std::string& name) {
+    const std::filesystem::path data(name);
+    if (data.is_absolute()) return data.string();
+    return (std::filesystem::path(header_path).parent_path() / data).string();
+}
+
+}  // namespace dsreg::volume_io_detail

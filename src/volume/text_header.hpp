@@ -1,0 +1,34 @@
+// dsreg — small helpers for the text headers of NRRD and MetaImage files (not public API).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "volume_io_internal.hpp"
+
+namespace dsreg::volume_io_detail {
+
+/// `text` without leading and trailing spaces, tabs and carriage returns.
+std::string trim(const std::string& text);
+
+/// Lower-case ASCII copy.
+std::string to_lower(std::string text);
+
+/// Reads one line (without its '\n' or a trailing '\r'). Returns false at the end of the file when
+/// no character was read. Throws (naming the file) once the header passes `max_header_bytes`.
+bool read_header_line(InputFile& file, std::string& line, std::uint64_t max_header_bytes);
+
+/// The whitespace-separated words of `text`.
+std::vector<std::string> split_words(const std::string& text);
+
+/// Whole-string parse of a decimal integer with an optional sign. False otherwise or on overflow.
+bool parse_integer(const std::string& text, std::int64_t& value);
+
+/// Skips `count` lines of the file (up to and including their '\n'); throws if it ends before.
+void skip_lines(InputFile& file, std::int64_t count, const std::string& field);
+
+/// `name` as written in a header, resolved against the folder of the header file.
+std::string path_beside(const std::string& header_path, const std::string& name);
+
+}  // namespace dsreg::volume_io_detail
