@@ -208,12 +208,14 @@ std::string new_dicom_uid() {
     return "2.25." + digits;
 }
 
-/// Numbers as a DICOM multi-valued decimal string (each at most 16 characters).
+/// Numbers as a DICOM multi-valued decimal string: each with as many digits as its 16
+/// characters allow (17 significant digits, or fewer when they do not fit).
 std::string dicom_numbers(std::initializer_list<double> numbers) {
     std::string text;
     for (const double x : numbers) {
-        char buffer[32];
-        std::snprintf(buffer, sizeof buffer, "%.10g", x);
+        char buffer[40];
+        for (int digits = 17; digits > 0; --digits)
+            if (std::snprintf(buffer, sizeof buffer, "%.*g", digits, x) <= 16) break;
         if (!text.empty()) text += '\\';
         text += buffer;
     }
