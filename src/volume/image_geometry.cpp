@@ -64,6 +64,19 @@ Index3 image_dims(const std::string& path, const ImageHeader& header) {
     return dims;
 }
 
+void check_sizes_within_limits(const std::string& path, const std::vector<std::int64_t>& sizes, std::int64_t components,
+                               const VolumeLimits& limits) {
+    std::int64_t product = components;
+    std::string shown;
+    for (const std::int64_t size : sizes) shown += (shown.empty() ? "" : "x") + std::to_string(size);
+    for (const std::int64_t size : sizes) {
+        if (size <= 0) fail(path, "sizes " + shown + " must all be positive");
+        if (size > limits.max_voxels / product)  // divide first: no overflow
+            fail(path, "sizes " + shown + " exceed the limit of " + std::to_string(limits.max_voxels) + " voxels");
+        product *= size;
+    }
+}
+
 double orthonormality_error(const Eigen::Matrix3d& direction) {
     return (direction.transpose() * direction - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
 }

@@ -32,6 +32,11 @@ Index3 image_dims(const std::string& path, const ImageHeader& header);
 /// `info`), others are rejected; zero or non-finite values are rejected.
 VoxelGrid image_geometry(const std::string& path, const ImageHeader& header, VolumeFileInfo& info);
 
+/// Throws (naming `path`) unless the product of `sizes` (times `components`) is at most
+/// limits.max_voxels: run on a header's own sizes before anything else reads the file.
+void check_sizes_within_limits(const std::string& path, const std::vector<std::int64_t>& sizes, std::int64_t components,
+                               const VolumeLimits& limits);
+
 /// Largest |DᵀD − I| accepted (and then orthonormalized). ITK itself takes 1e-4 as orthonormal;
 /// float32 storage (NIfTI) rounds at ~1e-7.
 constexpr double kOrthonormalTolerance = 1e-3;

@@ -153,6 +153,7 @@ void read_metaimage_voxels(const std::string& path, const VolumeLimits& limits, 
         detached = std::make_unique<InputFile>(data_path);
     }
     InputFile& data = detached ? *detached : file;
+    check_sizes_within_limits(path, header.sizes, header.channels, limits);
 
     const ImageHeader itk = read_itk_header(path, ItkFormat::MetaImage);
     check_itk_agrees(path, header, itk);

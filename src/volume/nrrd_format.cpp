@@ -176,6 +176,7 @@ void read_nrrd_voxels(const std::string& path, const VolumeLimits& limits, Voxel
         detached = std::make_unique<InputFile>(data_path);
     }
     InputFile& data = detached ? *detached : file;
+    check_sizes_within_limits(path, header.sizes, 1, limits);
 
     // The header as ITK reads it: dims (4-D and vector images rejected), geometry.
     const ImageHeader itk = read_itk_header(path, ItkFormat::Nrrd);
