@@ -69,6 +69,9 @@ struct VolumeFileInfo {
     std::string format;               ///< "NIfTI-1", "NRRD", "MetaImage", "DICOM series", ".vol", ...
     std::string value_type;           ///< type of the stored values: "uint8", "int16", "float32", ...
     std::vector<std::string> notes;   ///< what the reader assumed or corrected, one sentence each
+    /// The file places its voxels in world space (origin and direction cosines: the medical
+    /// formats but TIFF), so that meshes can be written in LPS or RAS (dsreg/world_space.hpp).
+    bool world_geometry = false;
 };
 
 /// Limits that protect the machine from absurd headers.

@@ -92,9 +92,11 @@ void write_vtp_polydata(OutputBuffer& buffer, const PolygonMesh& mesh) {
     buffer.append("    <Piece NumberOfPoints=\"" + std::to_string(n) + "\" NumberOfVerts=\"0\" NumberOfLines=\"0\" "
                   "NumberOfStrips=\"0\" NumberOfPolys=\"" + std::to_string(m) + "\">\n");
     buffer.append("      <PointData>\n");
-    for (const auto& [name, values] : mesh.vertex_scalars)
-        write_data_array(buffer, "Float64", xml_escaped(name), 1,
+    for (const auto& scalar : mesh.vertex_scalars) {
+        const Eigen::VectorXd& values = scalar.second;
+        write_data_array(buffer, "Float64", xml_escaped(scalar.first), 1,
                          binary_array<double>([&](std::size_t i) { return values[static_cast<Eigen::Index>(i)]; }, std::size_t(n)));
+    }
     buffer.append("      </PointData>\n      <CellData" + std::string(mesh.face_normals.rows() > 0 ? " Normals=\"u\"" : "") + ">\n");
     if (mesh.face_normals.rows() > 0)
         write_data_array(buffer, "Float64", "u", 3, binary_array<double>([&](std::size_t i) {

@@ -48,6 +48,7 @@ Index3 prepare_destination(const std::string& path, const ImageHeader& header, c
     VolumeFileInfo info;
     info.format = header.format;
     info.value_type = header.value_type;
+    info.world_geometry = header.format != itk_format_name(ItkFormat::Tiff);  // TIFF has no origin nor direction
     const VoxelGrid geometry = image_geometry(path, header, info);
     destination.allocate(path, dims);
     destination.set_geometry(geometry);

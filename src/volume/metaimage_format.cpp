@@ -183,6 +183,7 @@ void read_metaimage_voxels(const std::string& path, const VolumeLimits& limits, 
     VolumeFileInfo info;
     info.format = "MetaImage";
     info.value_type = header.value_type;
+    info.world_geometry = true;
     const VoxelGrid geometry = image_geometry(path, itk, info);
     destination.allocate(path, dims);
     destination.set_geometry(geometry);

@@ -460,6 +460,7 @@ void read_nifti_voxels(const std::string& path, const VolumeLimits& limits, Voxe
     VolumeFileInfo info;
     info.format = format_label(parsed.header);
     info.value_type = parsed.value_type;
+    info.world_geometry = true;
     const VoxelGrid geometry = nifti_grid(header_path, parsed, info);
     destination.allocate(path, parsed.dims);
     destination.set_geometry(geometry);

@@ -188,7 +188,8 @@ void read_npy_voxels(const std::string& path, const VolumeLimits& limits, VoxelD
     destination.info().format = header.format;
     destination.info().value_type = npy.value_type;
     // Fortran order, or at most one axis longer than 1 in the way: the file order is the grid's.
-    const bool grid_order = npy.fortran_order || (dims[1] == 1 && dims[2] == 1) || dims[0] == 1;
+    const bool grid_order =
+        npy.fortran_order || (dims[1] == 1 && dims[2] == 1) || dims[0] == 1 || !destination.keeps_voxel_order();
     if (grid_order) {
         SampleWriter sink = destination.writer(path, npy.sample);
         return decode_stored_payload(file, sink);

@@ -205,6 +205,7 @@ void read_nrrd_voxels(const std::string& path, const VolumeLimits& limits, Voxel
     VolumeFileInfo info;
     info.format = "NRRD";
     info.value_type = header.value_type;
+    info.world_geometry = true;
     const VoxelGrid geometry = image_geometry(path, itk, info);
     destination.allocate(path, dims);
     destination.set_geometry(geometry);

@@ -116,9 +116,13 @@ std::int64_t checked_voxel_count(const std::string& path, const Index3& dims, co
 // ----------------------------------------------------------------------------------------------
 // VoxelDestination
 
-VoxelDestination VoxelDestination::mask(const ValueRange& range) { return VoxelDestination(false, range); }
+VoxelDestination VoxelDestination::mask(const ValueRange& range) { return VoxelDestination(Kind::Mask, range); }
 
-VoxelDestination VoxelDestination::values() { return VoxelDestination(true, ValueRange{}); }
+VoxelDestination VoxelDestination::values() { return VoxelDestination(Kind::Values, ValueRange{}); }
+
+VoxelDestination VoxelDestination::statistics(ValueHistogram& histogram) {
+    return VoxelDestination(Kind::Statistics, ValueRange{}, &histogram);
+}
 
 void VoxelDestination::set_geometry(const VoxelGrid& geometry) {
     grid_.spacing = geometry.spacing;
@@ -130,15 +134,15 @@ void VoxelDestination::allocate(const std::string& path, const Index3& dims) {
     grid_ = VoxelGrid{};
     grid_.dims = dims;
     const auto count = static_cast<std::size_t>(grid_.voxel_count());
+    const bool values = kind_ == Kind::Values;
     try {
-        if (keep_values_)
+        if (kind_ == Kind::Values)
             values_.assign(count, 0.0f);
-        else
+        else if (kind_ == Kind::Mask)
             mask_.assign(count, 0);
     } catch (const std::bad_alloc&) {
-        const std::string bytes = std::to_string(grid_.voxel_count() * (keep_values_ ? 4 : 1));
-        fail(path, "not enough memory for a " + format_dims(dims) + (keep_values_ ? " volume of values (" : " mask (") + bytes +
-                       " bytes)");
+        const std::string bytes = std::to_string(grid_.voxel_count() * (values ? 4 : 1));
+        fail(path, "not enough memory for a " + format_dims(dims) + (values ? " volume of values (" : " mask (") + bytes + " bytes)");
     }
 }
 
@@ -148,15 +152,20 @@ void VoxelDestination::store_x_plane(std::int64_t i, const VoxelDestination& pla
         for (std::int64_t j = 0; j < ny; ++j) {
             const auto source = static_cast<std::size_t>(k + nz * j);
             const auto target = static_cast<std::size_t>(i + nx * (j + ny * k));
-            if (keep_values_)
+            if (kind_ == Kind::Values)
                 values_[target] = plane.values_[source];
-            else
+            else if (kind_ == Kind::Mask)
                 mask_[target] = plane.mask_[source];
         }
 }
 
 SampleWriter VoxelDestination::writer(const std::string& path, SampleFormat format) {
-    return keep_values_ ? SampleWriter(path, format, values_) : SampleWriter(path, format, range_, mask_);
+    switch (kind_) {
+    case Kind::Values: return SampleWriter(path, format, values_);
+    case Kind::Mask: return SampleWriter(path, format, range_, mask_);
+    case Kind::Statistics: break;
+    }
+    return SampleWriter(path, format, *histogram_, size());
 }
 
 BinaryVolume VoxelDestination::take_mask() {
@@ -258,6 +267,12 @@ SampleWriter::SampleWriter(const std::string& path, SampleFormat format, std::ve
     build_byte_tables();
 }
 
+SampleWriter::SampleWriter(const std::string& path, SampleFormat format, ValueHistogram& histogram, std::uint64_t size)
+    : SampleWriter(path, format, size) {
+    histogram_ = &histogram;
+    build_byte_tables();
+}
+
 void SampleWriter::rescale(double slope, double intercept) {
     rescaled_ = true;
     slope_ = slope;
@@ -284,8 +299,10 @@ void SampleWriter::emit(const std::uint8_t* sample) {
                         format_value(max_value_));
     if (mask_ != nullptr)
         mask_[written_++] = range_.contains(value) ? 1 : 0;
-    else
+    else if (values_ != nullptr)
         values_[written_++] = static_cast<float>(value);
+    else
+        histogram_->add(value), ++written_;
 }
 
 void SampleWriter::consume(const std::uint8_t* data, std::size_t count) {

@@ -21,6 +21,7 @@
 
 #include <zlib.h>
 
+#include "dsreg/value_histogram.hpp"
 #include "dsreg/volume.hpp"
 #include "dsreg/volume_io.hpp"
 #include "itk_bridge.hpp"
@@ -83,6 +84,8 @@ public:
     SampleWriter(const std::string& path, SampleFormat format, const ValueRange& range, std::vector<std::uint8_t>& mask);
     /// Values: values[i] = value of voxel i, rounded to float.
     SampleWriter(const std::string& path, SampleFormat format, std::vector<float>& values);
+    /// Statistics: each of the `size` values is added to `histogram`, nothing is stored.
+    SampleWriter(const std::string& path, SampleFormat format, ValueHistogram& histogram, std::uint64_t size);
 
     /// Values above `max_value` make consume() throw (naming the file and the voxel).
     void reject_values_above(double max_value, const std::string& limit_name);
@@ -107,8 +110,9 @@ private:
     std::string path_;
     SampleFormat format_;
     ValueRange range_;
-    std::uint8_t* mask_ = nullptr;  ///< exactly one of mask_ / values_ is set
+    std::uint8_t* mask_ = nullptr;  ///< exactly one of mask_ / values_ / histogram_ is set
     float* values_ = nullptr;
+    ValueHistogram* histogram_ = nullptr;
     std::uint64_t size_ = 0;
     bool use_byte_table_ = false;
     double byte_table_[256] = {};        ///< decoded value of each byte, for 1-byte samples
@@ -133,6 +137,8 @@ class VoxelDestination {
 public:
     static VoxelDestination mask(const ValueRange& range);
     static VoxelDestination values();
+    /// Nothing stored per voxel: every value goes to `histogram` (read_value_histogram).
+    static VoxelDestination statistics(ValueHistogram& histogram);
 
     /// Storage for `dims` voxels (spacing 1, origin 0, identity direction). Throws dsreg::Error
     /// naming `path` if the memory cannot be allocated.
@@ -144,16 +150,19 @@ public:
     std::uint64_t size() const { return static_cast<std::uint64_t>(grid_.voxel_count()); }
     /// Stores the value of voxel `index` (thresholded or rounded to float).
     void set(std::uint64_t index, double value) {
-        if (keep_values_)
-            values_[index] = static_cast<float>(value);
-        else
-            mask_[index] = range_.contains(value) ? 1 : 0;
+        switch (kind_) {
+        case Kind::Values: values_[index] = static_cast<float>(value); break;
+        case Kind::Mask: mask_[index] = range_.contains(value) ? 1 : 0; break;
+        case Kind::Statistics: histogram_->add(value); break;
+        }
     }
     /// A decoder of encoded samples into this destination.
     SampleWriter writer(const std::string& path, SampleFormat format);
 
-    /// An empty destination of the same kind (mask with the same range, or values).
-    VoxelDestination like() const { return VoxelDestination(keep_values_, range_); }
+    /// An empty destination of the same kind (mask with the same range, values, statistics).
+    VoxelDestination like() const { return VoxelDestination(kind_, range_, histogram_); }
+    /// False for statistics, which do not depend on the order of the voxels.
+    bool keeps_voxel_order() const { return kind_ != Kind::Statistics; }
     /// Copies `plane` (allocated with dims (nz, ny, 1): k fastest, then j) into the voxels
     /// (i, j, k) of this destination, for all j, k: a transposed plane of a C-order array.
     void store_x_plane(std::int64_t i, const VoxelDestination& plane);
@@ -162,10 +171,13 @@ public:
     ScalarVolume take_values();
 
 private:
-    VoxelDestination(bool keep_values, const ValueRange& range) : keep_values_(keep_values), range_(range) {}
+    enum class Kind { Mask, Values, Statistics };
+    VoxelDestination(Kind kind, const ValueRange& range, ValueHistogram* histogram = nullptr)
+        : kind_(kind), range_(range), histogram_(histogram) {}
 
-    bool keep_values_;
+    Kind kind_;
     ValueRange range_;
+    ValueHistogram* histogram_;
     VoxelGrid grid_;
     VolumeFileInfo info_;
     std::vector<std::uint8_t> mask_;
