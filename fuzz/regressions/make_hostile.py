@@ -204,3 +204,19 @@ put("vtp", "unstructured-grid.vtp", "<?xml version=\"1.0\"?><VTKFile type=\"Unst
 put("vtp", "offset-beyond-appended.vtp", "<VTKFile type=\"PolyData\"><PolyData><Piece NumberOfPoints=\"1\" NumberOfPolys=\"0\">"
     "<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"appended\" offset=\"999999\"/></Points></Piece>"
     "</PolyData><AppendedData encoding=\"raw\">_abc</AppendedData></VTKFile>")
+
+# ---- geometry fields ITK must not see (ITK 5.2 aborts the process on a NaN in a NIfTI sform;
+# fuzz/regressions/nifti/crash-nan-sform-itk-abort.nii is the fuzzer's original input)
+def with_srow(header, values):
+    header = bytearray(header)
+    struct.pack_into("<h", header, 254, 2)  # sform_code
+    struct.pack_into("<12f", header, 280, *values)
+    return bytes(header)
+
+
+put("nifti", "nan-sform.nii", with_srow(nifti1((2, 2, 2)), [float("nan"), 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0]) + b"\x01" * 8)
+put("nifti", "zero-sform-column.nii", with_srow(nifti1((2, 2, 2)), [0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0]) + b"\x01" * 8)
+put("nrrd", "nan-space-directions.nrrd", NRRD.format(type="uchar", dimension=3, sizes="2 2 2", encoding="raw",
+    extra="space: left-posterior-superior\nspace directions: (nan,0,0) (0,1,0) (0,0,1)\n") + "x" * 8)
+put("metaimage", "inf-offset.mha", MHA.format(ndims=3, sizes="2 2 2", type="MET_UCHAR", extra="Offset = inf 0 0\n", data="LOCAL")
+    + "x" * 8)

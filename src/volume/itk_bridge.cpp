@@ -65,6 +65,24 @@ std::string clean_itk_message(const std::string& description) {
     }
     for (char& c : text)
         if (c == '\n' || c == '\r' || c == '\t') c = ' ';
+    // teem's chains ("[nrrd] nrrdLoad: trouble reading ... [nrrd] _nrrdRead: trouble ..."): keep
+    // the pieces that say something, without the function names.
+    if (text.find("[nrrd] ") != std::string::npos) {
+        std::string kept;
+        std::size_t at = text.find("[nrrd] ");
+        while (at != std::string::npos) {
+            const std::size_t next = text.find("[nrrd] ", at + 7);
+            std::string piece = text.substr(at + 7, (next == std::string::npos ? text.size() : next) - at - 7);
+            if (const std::size_t colon = piece.find(": "); colon != std::string::npos && piece.find(' ') > colon)
+                piece.erase(0, colon + 2);
+            while (!piece.empty() && piece.back() == ' ') piece.pop_back();
+            if (!piece.empty() && piece != "trouble" && piece.rfind("trouble reading", 0) != 0 &&
+                piece.rfind("trouble reading NRRD file", 0) != 0)
+                kept += (kept.empty() ? "" : "; ") + piece;
+            at = next;
+        }
+        if (!kept.empty()) text = kept;
+    }
     while (!text.empty() && text.back() == ' ') text.pop_back();
     if (text.size() > 300) text = text.substr(0, 300) + "...";
     return text.empty() ? "unknown ITK error" : text;

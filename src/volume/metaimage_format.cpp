@@ -14,6 +14,7 @@
 
 #include "dsreg/volume_io.hpp"
 #include "image_geometry.hpp"
+#include "image_payload.hpp"
 #include "itk_bridge.hpp"
 #include "text_header.hpp"
 #include "volume_io_internal.hpp"
@@ -110,6 +111,12 @@ MetaHeader parse_header(InputFile& file) {
         if (!parse_positive_integer(word, size)) file.fail("DimSize: " + quote_excerpt(word) + " is not a positive integer");
         header.sizes.push_back(size);
     }
+    // Geometry is ITK's to read, but its values must be sane before ITK sees them.
+    for (const char* key : {"Offset", "Position", "Origin", "ElementSpacing", "ElementSize", "TransformMatrix", "Rotation",
+                            "Orientation", "CenterOfRotation"}) {
+        const auto found = fields.find(to_lower(key));
+        if (found != fields.end()) check_geometry_numbers(file, std::string(key), found->second);
+    }
     header.channels = integer_field(file, fields, "elementnumberofchannels", 1);
     if (header.channels < 1) file.fail("ElementNumberOfChannels must be at least 1");
     header.sample = meta_type(file, type->second);
@@ -131,16 +138,6 @@ MetaHeader parse_header(InputFile& file) {
     return header;
 }
 
-void check_itk_agrees(const std::string& path, const MetaHeader& header, const ImageHeader& itk) {
-    std::int64_t meta_values = header.channels, itk_values = itk.components;
-    for (const std::int64_t size : header.sizes) meta_values *= size;
-    for (const std::int64_t size : itk.sizes) itk_values *= size;
-    if (meta_values != itk_values)
-        fail(path, "ITK reads " + std::to_string(itk_values) + " values, the header's DimSize gives " + std::to_string(meta_values));
-    if (itk.value_type_supported && (itk.sample.bytes != header.sample.bytes || itk.sample.kind != header.sample.kind))
-        fail(path, "ITK reads the values as " + itk.value_type + ", the header says " + header.value_type);
-}
-
 }  // namespace
 
 void read_metaimage_voxels(const std::string& path, const VolumeLimits& limits, VoxelDestination& destination) {
@@ -153,45 +150,18 @@ void read_metaimage_voxels(const std::string& path, const VolumeLimits& limits, 
         detached = std::make_unique<InputFile>(data_path);
     }
     InputFile& data = detached ? *detached : file;
-    check_sizes_within_limits(path, header.sizes, header.channels, limits);
-
-    const ImageHeader itk = read_itk_header(path, ItkFormat::MetaImage);
-    check_itk_agrees(path, header, itk);
-    const Index3 dims = image_dims(path, itk);
-    const std::int64_t voxels = checked_voxel_count(path, dims, limits);
-    const std::uint64_t bytes = payload_bytes(path, voxels, header.sample.bytes);
-    const std::string description = "header says " + describe_payload(dims, voxels, header.sample.bytes);
-
-    if (header.header_size == -1) {
-        if (data.remaining() < bytes) data.fail("truncated payload: " + description + ", file holds " + std::to_string(data.size()) + " bytes");
-        data.skip(data.remaining() - bytes);
-    } else {
-        data.skip(static_cast<std::uint64_t>(header.header_size));
-    }
-    if (!header.compressed && data.remaining() < bytes)
-        data.fail("truncated payload: " + description + ", file holds " + std::to_string(data.remaining()) + " bytes of data");
-    if (header.compressed) {
-        if (header.compressed_size > 0 && static_cast<std::uint64_t>(header.compressed_size) > data.remaining())
-            data.fail("truncated payload: CompressedDataSize is " + std::to_string(header.compressed_size) + " bytes, the file holds " +
-                      std::to_string(data.remaining()) + " bytes of data");
-        const std::uint64_t compressed = header.compressed_size > 0 ? static_cast<std::uint64_t>(header.compressed_size) : data.remaining();
-        if (bytes > max_inflated_size(compressed))
-            data.fail("truncated or lying header: " + description + ", but the " + std::to_string(compressed) +
-                      "-byte compressed payload can inflate to at most " + std::to_string(max_inflated_size(compressed)) + " bytes");
-    }
-
-    VolumeFileInfo info;
-    info.format = "MetaImage";
-    info.value_type = header.value_type;
-    info.world_geometry = true;
-    const VoxelGrid geometry = image_geometry(path, itk, info);
-    destination.allocate(path, dims);
-    destination.set_geometry(geometry);
-    destination.info() = info;
-    SampleWriter sink = destination.writer(data.path(), header.sample);
-    if (!header.compressed) return decode_stored_prefix(data, sink);
-    InflateStream stream(data, CompressedContainer::ZlibOrGzip);
-    stream.decode(bytes, sink, description);
+    PayloadLayout layout;
+    layout.format = "MetaImage";
+    layout.sizes_field = "DimSize";
+    layout.sizes = header.sizes;
+    layout.components = header.channels;
+    layout.sample = header.sample;
+    layout.value_type = header.value_type;
+    layout.skip = header.header_size;
+    layout.compressed = header.compressed;
+    layout.container = CompressedContainer::ZlibOrGzip;
+    layout.compressed_size = header.compressed_size;
+    read_image_payload(path, ItkFormat::MetaImage, layout, data, limits, destination);
 }
 
 }  // namespace dsreg::volume_io_detail

@@ -11,6 +11,7 @@
 // direction within 1e-3 (noted) or rejects it.
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <memory>
@@ -23,6 +24,12 @@
 namespace dsreg::volume_io_detail {
 
 namespace {
+
+std::string format_number(double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", value);
+    return text;
+}
 
 constexpr std::size_t kNifti1HeaderBytes = 348;
 constexpr std::size_t kNifti2HeaderBytes = 540;
@@ -353,12 +360,34 @@ struct ParsedHeader {
     std::uint64_t data_offset = 0;  ///< where the voxels start in the data file (inflated, for .gz)
 };
 
+/// The transform fields must be plausible finite numbers, and the sform's columns non-zero: ITK
+/// 5.2 aborts the whole process (vnl's assert_finite) on a NaN in the sform, found by fuzzing.
+void check_transform_fields(const std::string& path, const NiftiHeader& h) {
+    constexpr double kLargest = 1e10;  // millimetres, or unitless cosines: far beyond any scanner
+    const auto check = [&](double value, const std::string& name) {
+        if (!std::isfinite(value) || std::abs(value) > kLargest)
+            fail(path, name + " holds " + format_number(value) + ", not a plausible finite number");
+    };
+    for (int i = 0; i < 4; ++i) check(h.pixdim[i], "pixdim[" + std::to_string(i) + "]");
+    check(h.quatern_b, "quatern_b");
+    check(h.quatern_c, "quatern_c");
+    check(h.quatern_d, "quatern_d");
+    for (int i = 0; i < 3; ++i) check(h.qoffset[i], std::string("qoffset_") + "xyz"[i]);
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 4; ++c) check(h.srow[r][c], std::string("srow_") + "xyz"[r] + "[" + std::to_string(c) + "]");
+    if (h.sform_code > 0)
+        for (int c = 0; c < 3; ++c)
+            if (h.srow[0][c] == 0 && h.srow[1][c] == 0 && h.srow[2][c] == 0)
+                fail(path, "the sform maps axis " + std::to_string(c + 1) + " to a zero vector");
+}
+
 ParsedHeader parse_header(const std::string& path, const std::vector<std::uint8_t>& bytes) {
     ParsedHeader parsed;
     bool swapped = false;
     const std::size_t size = announced_header_size(path, bytes.data(), bytes.size(), swapped);
     parsed.header = size == kNifti1HeaderBytes ? parse_nifti1(bytes.data(), swapped) : parse_nifti2(path, bytes.data(), swapped);
     parsed.dims = nifti_dims(path, parsed.header);
+    check_transform_fields(path, parsed.header);
     parsed.sample = nifti_sample(path, parsed.header, parsed.value_type);
     const double offset = parsed.header.vox_offset;
     if (!std::isfinite(offset) || offset < 0 || offset != std::floor(offset) || offset > 9e15)

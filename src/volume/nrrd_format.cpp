@@ -14,6 +14,7 @@
 
 #include "dsreg/volume_io.hpp"
 #include "image_geometry.hpp"
+#include "image_payload.hpp"
 #include "itk_bridge.hpp"
 #include "text_header.hpp"
 #include "volume_io_internal.hpp"
@@ -145,23 +146,20 @@ NrrdHeader parse_header(InputFile& file) {
         if (header.data_file.rfind("LIST", 0) == 0 || header.data_file.find('%') != std::string::npos)
             file.fail("data split over several files ('data file: " + quote_excerpt(header.data_file) + "') is not supported");
     }
+    // Geometry is ITK's to read, but its values must be sane before ITK sees them.
+    for (const auto& [key, name] : {std::pair<const char*, const char*>{"spacedirections", "space directions"},
+                                    {"spaceorigin", "space origin"}, {"spacings", "spacings"}}) {
+        const auto found = fields.find(key);
+        // NaN spacings are NRRD's way of saying "no spacing" (non-spatial axes).
+        const bool nan_spacing = std::string(key) == "spacings" && to_lower(found == fields.end() ? "" : found->second).find("nan") != std::string::npos;
+        if (found != fields.end() && !nan_spacing) check_geometry_numbers(file, std::string("field '") + name + "'", found->second);
+    }
     header.line_skip = integer_field(file, fields, "lineskip", 0);
     header.byte_skip = integer_field(file, fields, "byteskip", 0);
     if (header.line_skip < 0) file.fail("field 'line skip' is negative");
     if (header.byte_skip < -1) file.fail("field 'byte skip' must be -1 (data at the end of the file) or at least 0");
     if (header.byte_skip == -1 && header.gzip) file.fail("'byte skip: -1' is only meaningful with the raw encoding");
     return header;
-}
-
-/// ITK must read the same number of values of the same type as dsreg's parse says.
-void check_itk_agrees(const std::string& path, const NrrdHeader& header, const ImageHeader& itk) {
-    std::int64_t nrrd_values = 1, itk_values = itk.components;
-    for (const std::int64_t size : header.sizes) nrrd_values *= size;
-    for (const std::int64_t size : itk.sizes) itk_values *= size;
-    if (nrrd_values != itk_values)
-        fail(path, "ITK reads " + std::to_string(itk_values) + " values, the header's sizes give " + std::to_string(nrrd_values));
-    if (itk.value_type_supported && (itk.sample.bytes != header.sample.bytes || itk.sample.kind != header.sample.kind))
-        fail(path, "ITK reads the values as " + itk.value_type + ", the header says " + header.value_type);
 }
 
 }  // namespace
@@ -176,45 +174,20 @@ void read_nrrd_voxels(const std::string& path, const VolumeLimits& limits, Voxel
         detached = std::make_unique<InputFile>(data_path);
     }
     InputFile& data = detached ? *detached : file;
-    check_sizes_within_limits(path, header.sizes, 1, limits);
-
-    // The header as ITK reads it: dims (4-D and vector images rejected), geometry.
-    const ImageHeader itk = read_itk_header(path, ItkFormat::Nrrd);
-    check_itk_agrees(path, header, itk);
-    const Index3 dims = image_dims(path, itk);
-    const std::int64_t voxels = checked_voxel_count(path, dims, limits);
-    const std::uint64_t bytes = payload_bytes(path, voxels, header.sample.bytes);
-    const std::string description = "header says " + describe_payload(dims, voxels, header.sample.bytes);
-
     skip_lines(data, header.line_skip, "line skip");
-    if (!header.gzip) {
-        if (header.byte_skip == -1) {
-            if (data.remaining() < bytes) data.fail("truncated payload: " + description + ", file holds " + std::to_string(data.size()) + " bytes");
-            data.skip(data.remaining() - bytes);
-        } else {
-            data.skip(static_cast<std::uint64_t>(header.byte_skip));
-        }
-        if (data.remaining() < bytes)
-            data.fail("truncated payload: " + description + ", file holds " + std::to_string(data.remaining()) +
-                      " bytes after the header");
-    } else if (bytes + static_cast<std::uint64_t>(header.byte_skip) > max_inflated_size(data.remaining())) {
-        data.fail("truncated or lying header: " + description + ", but the " + std::to_string(data.remaining()) +
-                  "-byte gzip payload can inflate to at most " + std::to_string(max_inflated_size(data.remaining())) + " bytes");
-    }
-
-    VolumeFileInfo info;
-    info.format = "NRRD";
-    info.value_type = header.value_type;
-    info.world_geometry = true;
-    const VoxelGrid geometry = image_geometry(path, itk, info);
-    destination.allocate(path, dims);
-    destination.set_geometry(geometry);
-    destination.info() = info;
-    SampleWriter sink = destination.writer(data.path(), header.sample);
-    if (!header.gzip) return decode_stored_prefix(data, sink);
-    InflateStream stream(data, CompressedContainer::Gzip);
-    stream.skip(static_cast<std::uint64_t>(header.byte_skip), description);
-    stream.decode(bytes, sink, description);
+    PayloadLayout layout;
+    layout.format = "NRRD";
+    layout.sizes_field = "sizes";
+    layout.sizes = header.sizes;
+    layout.sample = header.sample;
+    layout.value_type = header.value_type;
+    layout.compressed = header.gzip;
+    // "byte skip" counts stored bytes for raw data, inflated bytes for gzip data.
+    if (header.gzip)
+        layout.inflated_skip = static_cast<std::uint64_t>(header.byte_skip);
+    else
+        layout.skip = header.byte_skip;
+    read_image_payload(path, ItkFormat::Nrrd, layout, data, limits, destination);
 }
 
 }  // namespace dsreg::volume_io_detail

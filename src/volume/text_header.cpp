@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <limits>
 
@@ -66,6 +68,27 @@ bool parse_integer(const std::string& text, std::int64_t& value) {
     }
     value = negative ? -result : result;
     return true;
+}
+
+void check_geometry_numbers(const InputFile& file, const std::string& field, const std::string& text) {
+    std::string token;
+    const auto check = [&] {
+        if (token.empty() || to_lower(token) == "none") return;
+        char* end = nullptr;
+        const double value = std::strtod(token.c_str(), &end);
+        if (end != token.c_str() + token.size() || !std::isfinite(value) || std::abs(value) > 1e10)
+            file.fail(field + ": " + quote_excerpt(token) + " is not a plausible finite number");
+        token.clear();
+    };
+    for (const char c : text) {
+        if (c == ' ' || c == '\t' || c == ',' || c == '(' || c == ')') {
+            check();
+            token.clear();
+        } else {
+            token.push_back(c);
+        }
+    }
+    check();
 }
 
 void skip_lines(InputFile& file, std::int64_t count, const std::string& field) {

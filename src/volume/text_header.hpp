@@ -25,6 +25,12 @@ std::vector<std::string> split_words(const std::string& text);
 /// Whole-string parse of a decimal integer with an optional sign. False otherwise or on overflow.
 bool parse_integer(const std::string& text, std::int64_t& value);
 
+/// Checks the numbers of a geometry field (origin, spacing, direction cosines: tokens separated
+/// by spaces, commas or parentheses; "none" skipped) and throws, naming the file and `field`,
+/// for one that is not a finite number of magnitude at most 1e10. ITK's readers must never see
+/// such values (ITK 5.2 aborts the process on a NaN in a NIfTI sform).
+void check_geometry_numbers(const InputFile& file, const std::string& field, const std::string& text);
+
 /// Skips `count` lines of the file (up to and including their '\n'); throws if it ends before.
 void skip_lines(InputFile& file, std::int64_t count, const std::string& field);
 
