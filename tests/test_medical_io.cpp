@@ -244,7 +244,7 @@ TEST(MedicalIo, LyingNrrdHeaderIsRejectedBeforeAllocating) {
     expect_error([&] { read_volume(scratch.path("huge.nrrd")); }, scratch.path("huge.nrrd"), "exceed the limit");
     // A detached header naming a missing data file.
     write_bytes(scratch.path("detached.nhdr"), "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: raw\ndata file: gone.raw\n");
-    expect_error([&] { read_volume(scratch.path("detached.nhdr")); }, scratch.path("detached.nhdr"), "gone.raw does not exist");
+    expect_error([&] { read_volume(scratch.path("detached.nhdr")); }, scratch.path("detached.nhdr"), "gone.raw (data file) does not exist");
     // --max-voxels is honoured before the payload is read.
     write_bytes(scratch.path("small.nrrd"), "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 4 4 4\nencoding: raw\n\n" + std::string(64, '\1'));
     VolumeLimits limits;

@@ -144,11 +144,7 @@ void read_metaimage_voxels(const std::string& path, const VolumeLimits& limits, 
     InputFile file(path);
     const MetaHeader header = parse_header(file);
     std::unique_ptr<InputFile> detached;
-    if (to_lower(header.data_file) != "local") {
-        const std::string data_path = path_beside(path, header.data_file);
-        if (!std::filesystem::exists(data_path)) fail(path, "its data file " + data_path + " (ElementDataFile) does not exist");
-        detached = std::make_unique<InputFile>(data_path);
-    }
+    if (to_lower(header.data_file) != "local") detached = open_data_file(path, header.data_file, "ElementDataFile");
     InputFile& data = detached ? *detached : file;
     PayloadLayout layout;
     layout.format = "MetaImage";
@@ -161,7 +157,7 @@ void read_metaimage_voxels(const std::string& path, const VolumeLimits& limits, 
     layout.compressed = header.compressed;
     layout.container = CompressedContainer::ZlibOrGzip;
     layout.compressed_size = header.compressed_size;
-    read_image_payload(path, ItkFormat::MetaImage, layout, data, limits, destination);
+    naming_header(path, [&] { read_image_payload(path, ItkFormat::MetaImage, layout, data, limits, destination); });
 }
 
 }  // namespace dsreg::volume_io_detail

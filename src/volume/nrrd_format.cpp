@@ -168,13 +168,9 @@ void read_nrrd_voxels(const std::string& path, const VolumeLimits& limits, Voxel
     InputFile file(path);
     const NrrdHeader header = parse_header(file);
     std::unique_ptr<InputFile> detached;
-    if (!header.data_file.empty()) {
-        const std::string data_path = path_beside(path, header.data_file);
-        if (!std::filesystem::exists(data_path)) fail(path, "its data file " + data_path + " does not exist");
-        detached = std::make_unique<InputFile>(data_path);
-    }
+    if (!header.data_file.empty()) detached = open_data_file(path, header.data_file, "data file");
     InputFile& data = detached ? *detached : file;
-    skip_lines(data, header.line_skip, "line skip");
+    naming_header(path, [&] { skip_lines(data, header.line_skip, "line skip"); });
     PayloadLayout layout;
     layout.format = "NRRD";
     layout.sizes_field = "sizes";
@@ -187,7 +183,7 @@ void read_nrrd_voxels(const std::string& path, const VolumeLimits& limits, Voxel
         layout.inflated_skip = static_cast<std::uint64_t>(header.byte_skip);
     else
         layout.skip = header.byte_skip;
-    read_image_payload(path, ItkFormat::Nrrd, layout, data, limits, destination);
+    naming_header(path, [&] { read_image_payload(path, ItkFormat::Nrrd, layout, data, limits, destination); });
 }
 
 }  // namespace dsreg::volume_io_detail

@@ -106,4 +106,19 @@ std::string path_beside(const std::string& header_path, const std::string& name)
     return (std::filesystem::path(header_path).parent_path() / data).string();
 }
 
+std::unique_ptr<InputFile> open_data_file(const std::string& header_path, const std::string& name, const std::string& field) {
+    for (const char c : name)
+        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+            fail(header_path, field + " names a file with control characters: " + quote_excerpt(name));
+    const std::string data_path = path_beside(header_path, name);
+    std::error_code error;
+    const auto status = std::filesystem::status(data_path, error);
+    if (!std::filesystem::exists(status)) fail(header_path, "its data file " + data_path + " (" + field + ") does not exist");
+    if (!std::filesystem::is_regular_file(status))
+        fail(header_path, "its data file " + data_path + " (" + field + ") is not a regular file");
+    std::unique_ptr<InputFile> file;
+    naming_header(header_path, [&] { file = std::make_unique<InputFile>(data_path); });
+    return file;
+}
+
 }  // namespace dsreg::volume_io_detail

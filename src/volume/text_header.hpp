@@ -2,9 +2,11 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "dsreg/error.hpp"
 #include "volume_io_internal.hpp"
 
 namespace dsreg::volume_io_detail {
@@ -36,5 +38,24 @@ void skip_lines(InputFile& file, std::int64_t count, const std::string& field);
 
 /// `name` as written in a header, resolved against the folder of the header file.
 std::string path_beside(const std::string& header_path, const std::string& name);
+
+/// Opens the data file that `field` of the header `header_path` names (relative to the header's
+/// folder). Throws dsreg::Error starting with the header's path for a name with control
+/// characters, a missing file, or anything but a regular file.
+std::unique_ptr<InputFile> open_data_file(const std::string& header_path, const std::string& name, const std::string& field);
+
+/// Runs `read`; an error about a detached data file (whose message starts with that file's path)
+/// is given again starting with the header's path, so that every message names the file the
+/// user gave.
+template <typename Read>
+void naming_header(const std::string& header_path, Read&& read) {
+    try {
+        read();
+    } catch (const Error& error) {
+        const std::string message = error.what();
+        if (message.rfind(header_path + ": ", 0) == 0) throw;
+        throw Error(header_path + ": in its data file, " + message);
+    }
+}
 
 }  // namespace dsreg::volume_io_detail
