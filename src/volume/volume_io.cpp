@@ -10,6 +10,7 @@
 #include <limits>
 #include <new>
 #include <sstream>
+#include <type_traits>
 #include <utility>
 
 #include "dsreg/atomic_file.hpp"
@@ -318,10 +319,103 @@ void SampleWriter::consume(const std::uint8_t* data, std::size_t count) {
         emit(pending_);
         pending_size_ = 0;
     }
-    for (; count >= width; data += width, count -= width) emit(data);
+    const std::size_t whole = count / width;
+    if (has_max_) {
+        for (std::size_t n = 0; n < whole; ++n) emit(data + n * width);  // PGM: each value checked against maxval
+    } else {
+        if (whole > size_ - written_) fail(path_, "payload holds more values than the " + std::to_string(size_) + " voxels announced");
+        decode_run(data, whole);
+    }
+    data += whole * width;
+    count -= whole * width;
     // Keep the incomplete tail (fewer than `width` ≤ 8 bytes) for the next chunk.
     pending_size_ = std::min(count, sizeof pending_);
     if (pending_size_ > 0) std::memcpy(pending_, data, pending_size_);
+}
+
+namespace {
+
+template <typename Unsigned>
+Unsigned byte_swapped(Unsigned bits) {
+    if constexpr (sizeof(Unsigned) == 2) return static_cast<Unsigned>(__builtin_bswap16(bits));
+    if constexpr (sizeof(Unsigned) == 4) return static_cast<Unsigned>(__builtin_bswap32(bits));
+    if constexpr (sizeof(Unsigned) == 8) return static_cast<Unsigned>(__builtin_bswap64(bits));
+    return bits;
+}
+
+bool host_big_endian() {
+    const std::uint16_t probe = 1;
+    std::uint8_t first;
+    std::memcpy(&first, &probe, 1);
+    return first == 0;
+}
+
+/// `count` values of type T (stored with bytes swapped if `swap`), each handed as a double to
+/// `store(index, value)`: the loop every decoder spends its time in.
+template <typename T, typename Store>
+void decode_values(const std::uint8_t* data, std::size_t count, bool swap, double slope, double intercept, bool rescaled,
+                   Store&& store) {
+    using Bits = std::conditional_t<sizeof(T) == 1, std::uint8_t,
+                                    std::conditional_t<sizeof(T) == 2, std::uint16_t,
+                                                       std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>>>;
+    for (std::size_t i = 0; i < count; ++i) {
+        Bits bits;
+        std::memcpy(&bits, data + i * sizeof(T), sizeof(T));
+        if (swap) bits = byte_swapped(bits);
+        T value;
+        std::memcpy(&value, &bits, sizeof(T));
+        double decoded = static_cast<double>(value);
+        if (rescaled) decoded = slope * decoded + intercept;
+        store(i, decoded);
+    }
+}
+
+}  // namespace
+
+template <typename T>
+void SampleWriter::decode_typed(const std::uint8_t* data, std::size_t count) {
+    const bool swap = format_.big_endian != host_big_endian();
+    if (mask_ != nullptr) {
+        std::uint8_t* out = mask_ + written_;
+        const ValueRange range = range_;
+        decode_values<T>(data, count, swap, slope_, intercept_, rescaled_,
+                         [&](std::size_t i, double v) { out[i] = range.contains(v) ? 1 : 0; });
+    } else if (values_ != nullptr) {
+        float* out = values_ + written_;
+        decode_values<T>(data, count, swap, slope_, intercept_, rescaled_,
+                         [&](std::size_t i, double v) { out[i] = static_cast<float>(v); });
+    } else {
+        decode_values<T>(data, count, swap, slope_, intercept_, rescaled_, [&](std::size_t, double v) { histogram_->add(v); });
+    }
+}
+
+void SampleWriter::decode_run(const std::uint8_t* data, std::size_t count) {
+    if (use_byte_table_) {  // 1-byte values: one table look-up each (the table holds the rescaled values)
+        if (mask_ != nullptr)
+            for (std::size_t i = 0; i < count; ++i) mask_[written_ + i] = mask_table_[data[i]];
+        else if (values_ != nullptr)
+            for (std::size_t i = 0; i < count; ++i) values_[written_ + i] = static_cast<float>(byte_table_[data[i]]);
+        else
+            for (std::size_t i = 0; i < count; ++i) histogram_->add(byte_table_[data[i]]);
+    } else {
+        switch (format_.kind) {
+        case SampleKind::Unsigned:
+            if (format_.bytes == 2) decode_typed<std::uint16_t>(data, count);
+            else if (format_.bytes == 4) decode_typed<std::uint32_t>(data, count);
+            else decode_typed<std::uint64_t>(data, count);
+            break;
+        case SampleKind::Signed:
+            if (format_.bytes == 2) decode_typed<std::int16_t>(data, count);
+            else if (format_.bytes == 4) decode_typed<std::int32_t>(data, count);
+            else decode_typed<std::int64_t>(data, count);
+            break;
+        case SampleKind::Float:
+            if (format_.bytes == 4) decode_typed<float>(data, count);
+            else decode_typed<double>(data, count);
+            break;
+        }
+    }
+    written_ += count;
 }
 
 // ----------------------------------------------------------------------------------------------

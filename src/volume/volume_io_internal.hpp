@@ -105,7 +105,11 @@ public:
 private:
     SampleWriter(const std::string& path, SampleFormat format, std::uint64_t size);
     void build_byte_tables();
-    void emit(const std::uint8_t* sample);
+    void emit(const std::uint8_t* sample);  ///< one value, with every check (PGM's maxval)
+    /// `count` whole values, after the caller checked they fit: the fast path.
+    void decode_run(const std::uint8_t* data, std::size_t count);
+    template <typename T>
+    void decode_typed(const std::uint8_t* data, std::size_t count);
 
     std::string path_;
     SampleFormat format_;
