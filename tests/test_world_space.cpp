@@ -102,12 +102,21 @@ struct Scene {
                                    test::rotation(-40, Eigen::Vector3d(3, -1, 2))};
 };
 
+/// The scene's ellipsoid written to `path` (ITK's writer for its extension), read and regularized.
+Regularized regularize_scene(const Scene& scene, const std::string& path, RawVoxelType type = RawVoxelType::UInt8) {
+    write_image(path, scene.grid, test::sample_ellipsoid(scene.grid, scene.ellipsoid), type);
+    return regularize_file(path);
+}
+
+/// The unregularized digital surface of `r` in `space`.
+PolygonMesh digital_surface_in(const Regularized& r, OutputSpace space) {
+    return mesh_in_space(PolygonMesh{r.surface.vertices, r.surface.quads, {}, {}, ""}, r.volume.grid, space);
+}
+
 TEST(WorldSpacePipeline, RegularizedMeshLiesOnTheWorldEllipsoidInLpsAndRas) {
     ScratchFolder scratch("world-accuracy");
     const Scene scene;
-    const std::string path = scratch.path("ellipsoid.nii.gz");
-    write_image(path, scene.grid, test::sample_ellipsoid(scene.grid, scene.ellipsoid), RawVoxelType::UInt8);
-    const Regularized r = regularize_file(path);
+    const Regularized r = regularize_scene(scene, scratch.path("ellipsoid.nii.gz"));
     const double voxel = r.volume.grid.spacing.minCoeff();  // the strictest reading of "0.1 voxel"
 
     const PolygonMesh lps = mesh_in_space(r.mesh, r.volume.grid, OutputSpace::Lps);
@@ -119,8 +128,7 @@ TEST(WorldSpacePipeline, RegularizedMeshLiesOnTheWorldEllipsoidInLpsAndRas) {
     EXPECT_LT(lps_mean, 0.1 * voxel);
     EXPECT_LT(ras_mean, 0.1 * voxel);
     // The digital surface itself is about a quarter of a voxel away: the regularization matters.
-    const PolygonMesh digital = mesh_in_space(PolygonMesh{r.surface.vertices, r.surface.quads, {}, {}, ""}, r.volume.grid,
-                                              OutputSpace::Lps);
+    const PolygonMesh digital = digital_surface_in(r, OutputSpace::Lps);
     const double digital_mean = mean_distance(scene.ellipsoid.shape(), digital.vertices);
     std::printf("digital surface: mean vertex distance %.4f mm\n", digital_mean);
     EXPECT_GT(digital_mean, 2 * lps_mean);
@@ -133,12 +141,9 @@ TEST(WorldSpacePipeline, RegularizedMeshLiesOnTheWorldEllipsoidInLpsAndRas) {
 TEST(WorldSpacePipeline, VoxelSpaceGivesIndexCoordinates) {
     ScratchFolder scratch("world-voxel");
     const Scene scene;
-    const std::string path = scratch.path("ellipsoid.nrrd");
-    write_image(path, scene.grid, test::sample_ellipsoid(scene.grid, scene.ellipsoid), RawVoxelType::UInt8);
-    const Regularized r = regularize_file(path);
+    const Regularized r = regularize_scene(scene, scratch.path("ellipsoid.nrrd"));
     // The digital surface's vertices, the voxel corners, land at half-integers.
-    const PolygonMesh corners = mesh_in_space(PolygonMesh{r.surface.vertices, r.surface.quads, {}, {}, ""}, r.volume.grid,
-                                              OutputSpace::Voxel);
+    const PolygonMesh corners = digital_surface_in(r, OutputSpace::Voxel);
     for (Eigen::Index v = 0; v < corners.vertices.rows(); ++v)
         for (int a = 0; a < 3; ++a) ASSERT_NEAR(corners.vertices(v, a) - std::floor(corners.vertices(v, a)), 0.5, 1e-9);
     // The file's own index-to-world transform takes the voxel-space mesh onto the LPS mesh.
@@ -157,9 +162,7 @@ TEST(WorldSpacePipeline, LeftHandedNiftiKeepsOutwardFaces) {
     scene.grid.origin = test::world_position(scene.grid, double(scene.grid.dims[0] - 1), 0, 0);
     scene.grid.direction = scene.grid.direction * Eigen::Vector3d(-1, 1, 1).asDiagonal();
     ASSERT_LT(scene.grid.direction.determinant(), 0);
-    const std::string path = scratch.path("left.nii");
-    write_image(path, scene.grid, test::sample_ellipsoid(scene.grid, scene.ellipsoid), RawVoxelType::Int16);
-    const Regularized r = regularize_file(path);
+    const Regularized r = regularize_scene(scene, scratch.path("left.nii"), RawVoxelType::Int16);
     ASSERT_LT(r.volume.grid.direction.determinant(), 0);
     const double volume = 4.0 / 3.0 * M_PI * 14 * 11 * 9;
     for (const OutputSpace space : {OutputSpace::Lps, OutputSpace::Ras}) {
