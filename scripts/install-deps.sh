@@ -6,15 +6,20 @@
 #                                    numpy for Debian's /usr/bin/python3 (tests/medical_interop_test.py)
 #   scripts/install-deps.sh --fuzz   also clang with its sanitizer/libFuzzer runtimes and OpenMP
 #                                    (scripts/sanitize.sh, scripts/fuzz.sh); implies --dev
+#   scripts/install-deps.sh --viewer also Chromium, which opens the HTML pages headless (the
+#                                    viewer's browser test, scripts/render.sh), and Python's PIL,
+#                                    with which the test reads the screenshots
+# libjs-three is a build dependency: three.js is inlined into dsreg's HTML pages (docs/viewer.md).
 set -euo pipefail
 packages=(build-essential cmake pkg-config libeigen3-dev libsuitesparse-dev libopenblas-dev zlib1g-dev
-          libcli11-dev nlohmann-json3-dev libcgal-dev libinsighttoolkit5-dev libgdcm-tools)
+          libcli11-dev nlohmann-json3-dev libcgal-dev libjs-three libinsighttoolkit5-dev libgdcm-tools)
 dev=(libgtest-dev libgmock-dev libbenchmark-dev python3 python3-numpy python3-nibabel python3-vtk9)
 for option in "$@"; do
     case $option in
         --dev) packages+=("${dev[@]}") ;;
         --fuzz) packages+=("${dev[@]}" clang libclang-rt-14-dev libomp-dev) ;;
-        *) echo "usage: $0 [--dev] [--fuzz]" >&2; exit 2 ;;
+        --viewer) packages+=(chromium python3-pil) ;;
+        *) echo "usage: $0 [--dev] [--fuzz] [--viewer]" >&2; exit 2 ;;
     esac
 done
 
