@@ -9,6 +9,7 @@
 
 #include "dsreg/error.hpp"
 #include "dsreg/pipeline.hpp"
+#include "dsreg/progress_display.hpp"
 #include "dsreg/regularization_metrics.hpp"
 #include "dsreg/text.hpp"
 
@@ -28,7 +29,7 @@ struct CliFlags {
     std::string solver = "auto";
     int connectivity = 26;
     std::string space = "lps";
-    bool quiet = false, verbose = false;
+    bool quiet = false, verbose = false, progress = false;
 };
 
 struct RegularizeCommand {
@@ -152,21 +153,24 @@ void apply_flags(RegularizeCommand& c) {
     if (at) parse_epsilon_range(f.at_epsilon, normals.at);
 }
 
-/// On stderr, as each stage ends: "dsreg: surface    0.024 s  37590 surfels, …".
-ProgressCallback stage_lines(bool shown) {
-    if (!shown) return {};
-    return [](const ProgressEvent& event) {
-        if (!event.finished) return;
-        std::cerr << "dsreg: " << event.stage << ' ' << format("%8.3f s", event.seconds)
-                  << (event.detail.empty() ? "" : "  " + event.detail) << '\n';
-    };
+/// On stderr: a live progress line on a terminal (or, with --progress, always: plain lines when
+/// stderr is not a terminal), and a line as each stage finishes on a terminal or with --verbose.
+ProgressCallback stderr_progress(const CliFlags& flags) {
+    const bool terminal = isatty(STDERR_FILENO);
+    ProgressDisplayOptions o;
+    o.live = terminal;
+    o.updates = flags.progress || (terminal && !flags.quiet);
+    o.stage_summaries = !flags.quiet && (flags.verbose || terminal);
+    if (!terminal) o.interval_seconds = 1.0;
+    if (!o.updates && !o.stage_summaries) return {};
+    return progress_display(std::cerr, o);
 }
 
 void run(RegularizeCommand& c) {
     apply_flags(c);
     check_pipeline_options(c.options, !c.source.shape.empty());
     check_pipeline_outputs(c.outputs);
-    const ProgressCallback progress = stage_lines(!c.flags.quiet && (c.flags.verbose || isatty(STDERR_FILENO)));
+    const ProgressCallback progress = stderr_progress(c.flags);
     PipelineResult result = run_pipeline(c.source, c.options, progress);
     write_pipeline_outputs(result, c.options, c.outputs, c.source, progress);
     if (c.flags.quiet) return;
@@ -213,6 +217,9 @@ void add_regularize_command(CLI::App& app) {
                     "colours by deviation from u, displacement, feature map; the run's summary (docs/viewer.md)");
     cmd->add_flag("-q,--quiet", c->flags.quiet, "Print nothing but errors");
     cmd->add_flag("-v,--verbose", c->flags.verbose, "Print each stage as it finishes");
+    cmd->add_flag("--progress", c->flags.progress,
+                  "Show progress on stderr even when it is not a terminal (one line per second; on a terminal a live "
+                  "line is shown anyway, unless --quiet)");
     cmd->callback([c] { run(*c); });
 }
 
