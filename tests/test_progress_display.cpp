@@ -60,6 +60,19 @@ TEST(ProgressDisplay, EachStageWaitsForItsOwnDelayAndUnknownFractionsShowTheElap
     EXPECT_EQ(f.out.str(), "\rdsreg: normals  1.5 s\033[K");
 }
 
+TEST(ProgressDisplay, AStepInsideAStageCountsTheDelayFromTheStageStart) {
+    Fixture f{ProgressDisplayOptions{}};
+    f.at(0.0, "regularize", 0.0);
+    f.at(0.8, "solve", 0.0, "amg iteration 1");
+    EXPECT_EQ(f.out.str(), "");
+    f.at(1.2, "solve", 0.2, "amg iteration 5");
+    // shown 1.2 s after "regularize" started; time left from the 0.4 s of "solve" so far
+    EXPECT_EQ(f.out.str(), "\rdsreg: solve  20%  ~1.6 s left  amg iteration 5\033[K");
+    f.out.str("");
+    f.finish(2.0, "regularize", 2.0, "amg");
+    EXPECT_EQ(f.out.str(), "\r\033[Kdsreg: regularize    2.000 s  amg\n");
+}
+
 TEST(ProgressDisplay, PlainLinesForAPipeAndNothingButSummariesWithoutUpdates) {
     ProgressDisplayOptions plain;
     plain.live = false;

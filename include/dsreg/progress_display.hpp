@@ -3,8 +3,9 @@
 // progress_display() turns the ProgressEvents of the library into text on a stream:
 //   - live (a terminal): one line, redrawn in place ("\r", erase to the end of the line), e.g.
 //       dsreg: solve  62%  ~1.4 s left  amg iteration 12, error bound 3.1e-04 voxel (target 5e-05)
-//     shown only once a stage has run `delay_seconds`, redrawn at most every `interval_seconds`,
-//     erased when the stage finishes;
+//     shown only once a stage has run `delay_seconds` (a step reported under another name inside
+//     a stage, such as "solve" inside "regularize", counts from the stage's start), redrawn at
+//     most every `interval_seconds`, erased when the stage finishes;
 //   - not live (a pipe or a log, when asked): the same text as one line per update, at most one
 //     every `interval_seconds`;
 //   - with stage_summaries, one line as each stage finishes: "dsreg: solve       1.234 s  …".

@@ -43,19 +43,23 @@ public:
 
     void operator()(const ProgressEvent& event) {
         const double now = options_.clock();
-        if (event.stage != stage_) {
-            erase();
+        if (!running_) {  // a stage starts: the delay counts from here
+            running_ = true;
+            running_since_ = now;
+        }
+        if (event.stage != stage_) {  // a new stage, or a step inside one ("solve" inside "regularize")
             stage_ = event.stage;
             stage_started_ = now;
-            last_update_ = -1;
         }
         if (event.finished) {
             erase();
             if (options_.stage_summaries) out_ << summary_text(event) << '\n' << std::flush;
             stage_.clear();
+            running_ = false;
+            last_update_ = -1;
             return;
         }
-        if (!options_.updates || now - stage_started_ < options_.delay_seconds) return;
+        if (!options_.updates || now - running_since_ < options_.delay_seconds) return;
         if (last_update_ >= 0 && now - last_update_ < options_.interval_seconds) return;
         last_update_ = now;
         std::string text = update_text(event, now - stage_started_);
@@ -78,8 +82,9 @@ private:
     std::ostream& out_;
     ProgressDisplayOptions options_;
     std::string stage_;
-    double stage_started_ = 0, last_update_ = -1;
-    bool shown_ = false;  ///< a live line is on the screen
+    double stage_started_ = 0, running_since_ = 0, last_update_ = -1;
+    bool running_ = false;  ///< between a stage's first event and its finished event
+    bool shown_ = false;    ///< a live line is on the screen
 };
 
 }  // namespace
