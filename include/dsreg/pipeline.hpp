@@ -8,7 +8,9 @@
 // every front end reports the same problem in the same words.
 //
 // Units: every length (h, box, radius, positions) is in the volume's physical units (see
-// volume.hpp); the mesh is in the grid frame of volume.hpp (origin + spacing ⊙ index).
+// volume.hpp). The pipeline works in the grid frame of volume.hpp (origin + spacing ⊙ index);
+// result_mesh moves its output into the world when the grid's axes are not the world's
+// (grid_placement.hpp: an array given with an oblique or mirrored affine).
 #pragma once
 
 #include <cstdint>
@@ -27,21 +29,26 @@
 #include "dsreg/solvers.hpp"
 #include "dsreg/volume.hpp"
 #include "dsreg/volume_io.hpp"
+#include "dsreg/voxel_array.hpp"
 
 namespace dsreg {
 
 // ---------------------------------------------------------------------------------------------
 // Stage 1: where the binary volume comes from.
 
-/// A volume file or an implicit shape, and which voxels form the object.
+/// A volume file, an implicit shape or a caller's array, and which voxels form the object.
 struct VolumeSource {
     std::string input_path;   ///< a volume file (any format read_volume accepts), or
-    std::string shape;        ///< a named shape or a polynomial in x, y, z (F ≤ 0 inside)
+    std::string shape;        ///< a named shape or a polynomial in x, y, z (F ≤ 0 inside), or
+    std::optional<VoxelArray> array;  ///< values in the caller's memory (the Python module's numpy arrays)
+    /// Of an array: the voxel-to-world affine (grid_placement.hpp); or `spacing` and `origin`.
+    std::optional<Eigen::Matrix4d> affine;
+    std::optional<Eigen::Vector3d> origin;       ///< of an array: centre of voxel (0,0,0); default 0
     std::optional<double> h;  ///< grid step of --shape; unset = default_grid_step
     double box = 10;          ///< half-size of the domain of a polynomial shape
     std::optional<double> min_value, max_value;  ///< object = MIN ≤ value ≤ MAX (default value > 0)
     std::optional<RawVolumeLayout> raw_layout;   ///< layout of a .raw file (--raw-dims, --raw-type, …)
-    std::optional<Eigen::Vector3d> spacing;      ///< overrides the file's voxel size
+    std::optional<Eigen::Vector3d> spacing;      ///< overrides the file's voxel size; an array's (default 1)
     std::int64_t max_voxels = std::int64_t(1) << 34;
     std::string max_memory;  ///< --max-memory as given ("4G"); empty = no limit
 };
@@ -51,12 +58,20 @@ struct LoadedVolume {
     BinaryVolume volume;
     std::string description;             ///< e.g. "bunny.vol" or "goursat at h=0.25"
     std::optional<ImplicitShape> shape;  ///< set for --shape inputs
-    double h = 1;                        ///< grid step (largest spacing for files)
+    double h = 1;                        ///< grid step (largest spacing for files and arrays)
+    /// Directions of the grid's axes in the world (columns; grid_placement.hpp): identity but for
+    /// arrays placed by an oblique or mirrored affine.
+    Eigen::Matrix3d direction = Eigen::Matrix3d::Identity();
 };
 
-/// Reads or digitizes the volume. Honours max_voxels and max_memory before reading any payload.
-/// Throws dsreg::Error on any problem, including an empty object (naming the file's value range).
+/// Reads, digitizes or thresholds the volume. Honours max_voxels and max_memory before reading
+/// any payload. Throws dsreg::Error on any problem, including an empty object (naming the
+/// values the input has); dsreg::FileError when a file cannot be opened.
 LoadedVolume load_volume(const VolumeSource& source);
+
+/// The values of the volume file of `source` (not thresholded; volume_io.hpp's
+/// read_volume_values) with the same limits, raw layout and --spacing as load_volume.
+ScalarVolume load_volume_values(const VolumeSource& source);
 
 /// Parses a memory size: a number of bytes with an optional suffix K, M, G or T (powers of 1024,
 /// optionally followed by "iB" or "B", any case), e.g. "4G", "512MiB", "1.5g", "1000000".
@@ -160,6 +175,7 @@ void check_pipeline_options(const PipelineOptions& options, bool input_is_shape)
 struct PipelineResult {
     std::string input;  ///< description of the input volume
     VoxelGrid grid;
+    Eigen::Matrix3d direction = Eigen::Matrix3d::Identity();  ///< of the grid's axes (LoadedVolume)
     std::int64_t object_voxels = 0;
     DigitalSurface surface;
     NormalField field;
@@ -186,7 +202,8 @@ PipelineResult run_pipeline(const VolumeSource& source, const PipelineOptions& o
 
 /// The output mesh: the regularized vertices (or the digital ones with `digital`), the quads (or
 /// triangles, split along the shorter diagonal), the field u per face and, after AT, the feature
-/// map v per vertex ("v").
+/// map v per vertex ("v"); in the world (grid_placement.hpp's move_to_world with the result's
+/// direction).
 PolygonMesh result_mesh(const PipelineResult& result, bool triangulate, bool digital = false);
 
 /// Where the results go; empty paths are not written.

@@ -8,6 +8,7 @@
 #include "dsreg/atomic_file.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
+#include "dsreg/grid_placement.hpp"
 #include "dsreg/mesh_io.hpp"
 #include "dsreg/normals_file.hpp"
 #include "dsreg/text.hpp"
@@ -45,6 +46,7 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
     PipelineResult result;
     result.input = loaded.description;
     result.grid = loaded.volume.grid;
+    result.direction = loaded.direction;
     result.object_voxels = loaded.volume.object_voxel_count();
     if (result.object_voxels == 0) throw Error(loaded.description + ": the object is empty");
 
@@ -123,7 +125,8 @@ PolygonMesh result_mesh(const PipelineResult& result, bool triangulate, bool dig
     mesh.faces = result.surface.quads;
     mesh.face_normals = result.field.normals;
     if (result.field.at) mesh.vertex_scalars.emplace_back("v", result.field.at->features);
-    return triangulate ? triangulate_shorter_diagonal(mesh) : mesh;
+    return move_to_world(triangulate ? triangulate_shorter_diagonal(mesh) : std::move(mesh), result.direction,
+                         result.grid.origin);
 }
 
 void check_pipeline_outputs(const PipelineOutputs& o) {
@@ -151,7 +154,9 @@ void write_pipeline_outputs(PipelineResult& result, const PipelineOptions& optio
     if (!outputs.input_mesh.empty()) write_mesh(outputs.input_mesh, result_mesh(result, outputs.triangulate, true));
     if (!outputs.normals.empty())
         write_normals_file(outputs.normals, result.surface, result.field.normals, result.field.description);
-    write_feature_lines(outputs.features, options.normals, result.field, result.surface, result.regularization.positions);
+    if (!outputs.features.empty())
+        write_feature_lines(outputs.features, options.normals, result.field, result.surface,
+                            result_mesh(result, false).vertices);
     clock.finish(outputs.mesh);
     result.stage_seconds.push_back(clock.stage_seconds().back());
     if (outputs.report.empty()) return;
@@ -166,9 +171,12 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
     const SolveReport& solve = r.regularization.solve;
     nlohmann::json report;
     report["input"] = r.input;
+    nlohmann::json direction = nlohmann::json::array();
+    for (int row = 0; row < 3; ++row) direction.push_back({r.direction(row, 0), r.direction(row, 1), r.direction(row, 2)});
     report["grid"] = {{"dims", r.grid.dims},
                       {"spacing", {r.grid.spacing.x(), r.grid.spacing.y(), r.grid.spacing.z()}},
-                      {"origin", {r.grid.origin.x(), r.grid.origin.y(), r.grid.origin.z()}}};
+                      {"origin", {r.grid.origin.x(), r.grid.origin.y(), r.grid.origin.z()}},
+                      {"direction", direction}};
     report["counts"] = {{"voxels", r.grid.voxel_count()},
                         {"object_voxels", r.object_voxels},
                         {"surfels", surface.face_count()},
