@@ -4,17 +4,24 @@
 #   scripts/install-deps.sh --dev    also the test and benchmark libraries
 #   scripts/install-deps.sh --fuzz   also clang with its sanitizer/libFuzzer runtimes and OpenMP
 #                                    (scripts/sanitize.sh, scripts/fuzz.sh); implies --dev
+#   scripts/install-deps.sh --python also what `pip install --no-build-isolation .` needs offline
+#                                    (docs/python.md); with --dev, the Python tests' packages too
 set -euo pipefail
 packages=(build-essential cmake pkg-config libeigen3-dev libsuitesparse-dev libopenblas-dev zlib1g-dev
           libcli11-dev nlohmann-json3-dev)
 dev=(libgtest-dev libgmock-dev libbenchmark-dev)
+python=(python3-dev python3-numpy python3-venv python3-setuptools python3-wheel pybind11-dev)
+python_dev=(python3-pytest python3-nibabel python3-meshio)
+with_dev=false with_python=false
 for option in "$@"; do
     case $option in
-        --dev) packages+=("${dev[@]}") ;;
+        --dev) packages+=("${dev[@]}"); with_dev=true ;;
         --fuzz) packages+=("${dev[@]}" clang libclang-rt-14-dev libomp-dev) ;;
-        *) echo "usage: $0 [--dev] [--fuzz]" >&2; exit 2 ;;
+        --python) packages+=("${python[@]}"); with_python=true ;;
+        *) echo "usage: $0 [--dev] [--fuzz] [--python]" >&2; exit 2 ;;
     esac
 done
+$with_dev && $with_python && packages+=("${python_dev[@]}")
 
 missing=()
 for p in "${packages[@]}"; do
