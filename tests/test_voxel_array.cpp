@@ -97,6 +97,31 @@ TEST(VoxelArray, EveryTypeByteOrderAndLayoutThresholdsLikeTheValues) {
     expect_thresholds<double>(ValueKind::Float);
 }
 
+TEST(VoxelArray, ArraysLargerThanATileGiveTheSameMaskInAnyOrder) {
+    const Index3 dims{150, 70, 30};  // several tiles along every axis, partial ones at the ends
+    const auto value = [](std::int64_t i, std::int64_t j, std::int64_t k) { return std::uint8_t((i * 7 + j * 3 + k) % 5 == 0); };
+    std::vector<std::uint8_t> expected, c_order(std::size_t(dims[0] * dims[1] * dims[2]));
+    for (std::int64_t k = 0; k < dims[2]; ++k)
+        for (std::int64_t j = 0; j < dims[1]; ++j)
+            for (std::int64_t i = 0; i < dims[0]; ++i) {
+                expected.push_back(value(i, j, k));
+                c_order[std::size_t((i * dims[1] + j) * dims[2] + k)] = value(i, j, k);
+            }
+    VoxelArray array;
+    array.data = c_order.data();
+    array.dims = dims;
+    array.byte_strides = {dims[1] * dims[2], dims[2], 1};
+    EXPECT_EQ(threshold_voxel_array(array, ValueRange{}), expected);
+    // The same values seen backwards along y: start at the last row, negative stride.
+    array.data = c_order.data() + (dims[1] - 1) * dims[2];
+    array.byte_strides[1] = -dims[2];
+    const std::vector<std::uint8_t> mirrored = threshold_voxel_array(array, ValueRange{});
+    for (std::int64_t k = 0; k < dims[2]; ++k)
+        for (std::int64_t j = 0; j < dims[1]; ++j)
+            for (std::int64_t i = 0; i < dims[0]; ++i)
+                ASSERT_EQ(mirrored[std::size_t(i + dims[0] * (j + dims[1] * k))], value(i, dims[1] - 1 - j, k));
+}
+
 TEST(VoxelArray, HalfFloatsDecodeExactly) {
     // IEEE binary16 bit patterns and their values: ±0, 1, −2, 65504 (largest), 2^-24
     // (smallest subnormal), 2^-14 (smallest normal), infinity and a NaN.

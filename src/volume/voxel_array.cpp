@@ -82,10 +82,51 @@ void with_decoder(const VoxelArray& a, Job&& job) {
     }
 }
 
-/// First byte of row (j, k) = row index j + ny·k.
-const std::uint8_t* row_start(const VoxelArray& a, std::int64_t row) {
-    const std::int64_t j = row % a.dims[1], k = row / a.dims[1];
-    return a.data + j * a.byte_strides[1] + k * a.byte_strides[2];
+/// Calls visit(address of the value, linear index) for every voxel, tile by tile (tiles in
+/// parallel), within a tile in the array's memory order (its axes by increasing |stride|). When x
+/// is the fastest axis in memory (Fortran order, dsreg's own), a tile is a whole row: values and
+/// mask are both read and written in order. Otherwise (a C-ordered numpy array, say) a row along
+/// x would touch a new cache line at every voxel; small tiles keep the lines of both the values
+/// and the mask in cache instead. Tiles of 12 voxels along the fastest axis and 128 × 64 (x
+/// first) along the others, measured on a 512 × 512 × 300 C-ordered uint8 array (one thread):
+/// 0.22 s instead of 0.80 s row by row (0.084 s in Fortran order); 16 or 32 along the fastest
+/// axis are slower (0.30, 0.41 s: their writes, a whole x-y plane apart, share cache sets).
+template <typename Visit>
+void for_each_voxel(const VoxelArray& a, Visit&& visit) {
+    const std::array<std::int64_t, 3> linear_step{1, a.dims[0], a.dims[0] * a.dims[1]};
+    std::array<int, 3> axes{0, 1, 2};  // fastest in memory first
+    std::stable_sort(axes.begin(), axes.end(),
+                     [&](int p, int q) { return std::abs(a.byte_strides[p]) < std::abs(a.byte_strides[q]); });
+    std::array<std::int64_t, 3> tile_size{128, 64, 64};
+    if (axes[0] == 0)
+        tile_size = {a.dims[0], 1, 1};
+    else
+        tile_size[axes[0]] = 12;
+    std::array<std::int64_t, 3> tiles{};
+    for (int d = 0; d < 3; ++d) tiles[d] = (a.dims[d] + tile_size[d] - 1) / tile_size[d];
+    const std::int64_t tile_count = tiles[0] * tiles[1] * tiles[2];
+#pragma omp parallel for schedule(static)
+    for (std::int64_t t = 0; t < tile_count; ++t) {
+        const std::array<std::int64_t, 3> tile{t % tiles[0], (t / tiles[0]) % tiles[1], t / (tiles[0] * tiles[1])};
+        std::array<std::int64_t, 3> low{}, high{};
+        for (int d = 0; d < 3; ++d) {
+            low[d] = tile[d] * tile_size[d];
+            high[d] = std::min(a.dims[d], low[d] + tile_size[d]);
+        }
+        const int inner = axes[0], middle = axes[1], outer = axes[2];
+        std::array<std::int64_t, 3> x = low;
+        for (x[outer] = low[outer]; x[outer] < high[outer]; ++x[outer])
+            for (x[middle] = low[middle]; x[middle] < high[middle]; ++x[middle]) {
+                x[inner] = low[inner];
+                const std::uint8_t* in = a.data + x[0] * a.byte_strides[0] + x[1] * a.byte_strides[1] + x[2] * a.byte_strides[2];
+                std::int64_t out = x[0] * linear_step[0] + x[1] * linear_step[1] + x[2] * linear_step[2];
+                for (std::int64_t n = low[inner]; n < high[inner]; ++n) {
+                    visit(in, out);
+                    in += a.byte_strides[inner];
+                    out += linear_step[inner];
+                }
+            }
+    }
 }
 
 }  // namespace
@@ -104,32 +145,27 @@ void check_voxel_array(const VoxelArray& a) {
 
 std::vector<std::uint8_t> threshold_voxel_array(const VoxelArray& a, const ValueRange& range) {
     check_voxel_array(a);
-    const std::int64_t nx = a.dims[0], rows = a.dims[1] * a.dims[2], stride = a.byte_strides[0];
-    std::vector<std::uint8_t> mask(static_cast<std::size_t>(nx * rows));
+    std::vector<std::uint8_t> mask(static_cast<std::size_t>(a.dims[0] * a.dims[1] * a.dims[2]));
+    std::uint8_t* out = mask.data();
     with_decoder(a, [&](auto decode) {
-#pragma omp parallel for schedule(static)
-        for (std::int64_t row = 0; row < rows; ++row) {
-            const std::uint8_t* in = row_start(a, row);
-            std::uint8_t* out = mask.data() + row * nx;
-            for (std::int64_t i = 0; i < nx; ++i) out[i] = range.contains(decode(in + i * stride)) ? 1 : 0;
-        }
+        for_each_voxel(a, [&](const std::uint8_t* value, std::int64_t index) {
+            out[index] = range.contains(decode(value)) ? 1 : 0;
+        });
     });
     return mask;
 }
 
 std::optional<std::pair<double, double>> voxel_array_value_range(const VoxelArray& a) {
     check_voxel_array(a);
-    const std::int64_t nx = a.dims[0], rows = a.dims[1] * a.dims[2], stride = a.byte_strides[0];
+    const std::int64_t voxels = a.dims[0] * a.dims[1] * a.dims[2];
     double low = std::numeric_limits<double>::infinity(), high = -low;
     with_decoder(a, [&](auto decode) {
 #pragma omp parallel for schedule(static) reduction(min : low) reduction(max : high)
-        for (std::int64_t row = 0; row < rows; ++row) {
-            const std::uint8_t* in = row_start(a, row);
-            for (std::int64_t i = 0; i < nx; ++i) {
-                const double value = decode(in + i * stride);
-                if (value < low) low = value;  // NaN compares false both ways: left out
-                if (value > high) high = value;
-            }
+        for (std::int64_t v = 0; v < voxels; ++v) {
+            const std::int64_t i = v % a.dims[0], j = (v / a.dims[0]) % a.dims[1], k = v / (a.dims[0] * a.dims[1]);
+            const double value = decode(a.data + i * a.byte_strides[0] + j * a.byte_strides[1] + k * a.byte_strides[2]);
+            if (value < low) low = value;  // NaN compares false both ways: left out
+            if (value > high) high = value;
         }
     });
     if (low > high) return std::nullopt;
