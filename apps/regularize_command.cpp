@@ -170,6 +170,9 @@ void add_pipeline_flags(CLI::App& command, RegularizeCommand& c) {
     command.add_flag("--triangulate", c.outputs.triangulate, "Split each quad along its shorter diagonal");
     command.add_option("--input-mesh", c.outputs.input_mesh, "Also write the unregularized digital surface to this file");
     command.add_option("--report", c.outputs.report, "Write counts, timings, energies and parameters as JSON");
+    command.add_option("--html", c.outputs.html,
+                       "Write a self-contained HTML page showing the result in 3D: the surface, the digital surface, "
+                       "colours by deviation from u, displacement, feature map; the run's summary (docs/viewer.md)");
 }
 
 void add_regularize_command(CLI::App& app) {

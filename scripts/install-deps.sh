@@ -6,9 +6,13 @@
 #                                    (scripts/sanitize.sh, scripts/fuzz.sh); implies --dev
 #   scripts/install-deps.sh --python also what `pip install --no-build-isolation .` needs offline
 #                                    (docs/python.md); with --dev, the Python tests' packages too
+#   scripts/install-deps.sh --viewer also Chromium, which opens the HTML pages headless (the
+#                                    viewer's browser test, scripts/render.sh), and Python's PIL,
+#                                    with which the test reads the screenshots
+# libjs-three is a build dependency: three.js is inlined into dsreg's HTML pages (docs/viewer.md).
 set -euo pipefail
 packages=(build-essential cmake pkg-config libeigen3-dev libsuitesparse-dev libopenblas-dev zlib1g-dev
-          libcli11-dev nlohmann-json3-dev)
+          libcli11-dev nlohmann-json3-dev libcgal-dev libjs-three)
 dev=(libgtest-dev libgmock-dev libbenchmark-dev)
 python=(python3-dev python3-numpy python3-venv python3-setuptools python3-wheel pybind11-dev)
 python_dev=(python3-pytest python3-nibabel python3-meshio)
@@ -18,7 +22,8 @@ for option in "$@"; do
         --dev) packages+=("${dev[@]}"); with_dev=true ;;
         --fuzz) packages+=("${dev[@]}" clang libclang-rt-14-dev libomp-dev) ;;
         --python) packages+=("${python[@]}"); with_python=true ;;
-        *) echo "usage: $0 [--dev] [--fuzz] [--python]" >&2; exit 2 ;;
+        --viewer) packages+=(chromium python3-pil) ;;
+        *) echo "usage: $0 [--dev] [--fuzz] [--python] [--viewer]" >&2; exit 2 ;;
     esac
 done
 $with_dev && $with_python && packages+=("${python_dev[@]}")
