@@ -209,13 +209,19 @@ PolygonMesh result_mesh(const PipelineResult& result, bool triangulate, bool dig
 
 /// Where the results go; empty paths are not written.
 struct PipelineOutputs {
-    std::string mesh;          ///< -o: .obj .off .ply .stl
+    std::string mesh;          ///< -o: .obj .off .ply .stl (empty in the Python module, which returns the mesh)
     std::string input_mesh;    ///< --input-mesh: the digital surface
     std::string normals;       ///< --export-normals: the field u in the --normals-file format
     std::string features;      ///< --features: AT feature lines as OBJ polylines
     std::string report;        ///< --report: JSON
     std::string html;          ///< --html: a self-contained page showing the result (result_page)
     bool triangulate = false;  ///< --triangulate
+
+    /// Whether any file is to be written.
+    bool any() const {
+        return !mesh.empty() || !input_mesh.empty() || !normals.empty() || !features.empty() || !report.empty() ||
+               !html.empty();
+    }
 };
 
 /// The --html page (html_view.hpp): one layer, the regularized surface as quads (also with

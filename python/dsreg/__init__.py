@@ -72,11 +72,6 @@ _EVALUATION_FLAGS = _flag_table(_dsreg.evaluation_flags())
 EXCLUDED_REGULARIZE_FLAGS = {
     "help": "help(dsreg.regularize)",
     "output": "regularize() returns the Mesh; Mesh.write(path) writes it",
-    "triangulate": "Mesh.triangles() splits the quads",
-    "input-mesh": "the digital surface is not returned (the command line writes it)",
-    "report": "Mesh.report holds the report, as a dict",
-    "export-normals": "Mesh.face_normals holds the normal field u",
-    "features": "Mesh.vertex_scalars['v'] holds the feature map of normals='at' (near 0 on the feature lines)",
     "spacing": "spacing= is an argument of its own (with origin= and affine=)",
     "quiet": "nothing is printed; progress= receives the stages",
     "verbose": "nothing is printed; progress= receives the stages",
@@ -161,12 +156,15 @@ def regularize(mask, *, affine=None, spacing=None, origin=None, progress=None, *
         The command line's flags, ``-`` written ``_`` (listed below): values are written as the
         flag's text and checked by the command line's parser (``raw_dims=(4, 5, 6)`` is
         ``--raw-dims 4,5,6``; a switch such as ``clamp=True`` is ``--clamp``; None leaves the
-        default). Lengths (radius, h, box) are in physical units.
+        default). Lengths (radius, h, box) are in physical units. The flags that write files
+        (``report=``, ``html=``, ``input_mesh=``, ``export_normals=``, ``features=``) write them
+        as the command line does, after the run (a "write" stage).
 
     Returns
     -------
     Mesh
-        vertices (n, 3) float64, faces (m, 4) int64 counter-clockwise seen from outside,
+        vertices (n, 3) float64, faces (m, 4) int64 counter-clockwise seen from outside (with
+        ``triangulate=True``, (2m, 3) triangles split along the shorter diagonal),
         face_normals (the normal field u), vertex_scalars (``"v"`` with ``normals="at"``), report
         (the command line's ``--report`` content).
 

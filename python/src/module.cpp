@@ -160,17 +160,20 @@ py::dict regularize(const py::object& input, const std::vector<std::string>& arg
     source.affine = affine;
     if (spacing) source.spacing = spacing;
     source.origin = origin;
-    check_pipeline_options(job.command.options, !source.shape.empty());
+    const PipelineOptions& options = job.command.options;
+    const PipelineOutputs& outputs = job.command.outputs;  // files of --report, --html, ... if asked
+    check_pipeline_options(options, !source.shape.empty());
+    check_pipeline_outputs(outputs);
 
     Interruption interruption(progress);
-    PipelineResult result;
     std::string report;
     PolygonMesh mesh;
     try {
         py::gil_scoped_release release;
-        result = run_pipeline(source, job.command.options, interruption.callback());
-        mesh = result_mesh(result, false);
-        report = pipeline_report(result, job.command.options, job.command.outputs, source).dump();
+        PipelineResult result = run_pipeline(source, options, interruption.callback());
+        if (outputs.any()) write_pipeline_outputs(result, options, outputs, source, interruption.callback());
+        mesh = result_mesh(result, outputs.triangulate);
+        report = pipeline_report(result, options, outputs, source).dump();
     } catch (const Interrupted&) {
         interruption.raise();
     }

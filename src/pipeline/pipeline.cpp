@@ -126,7 +126,7 @@ PolygonMesh result_mesh(const PipelineResult& result, bool triangulate, bool dig
 }
 
 void check_pipeline_outputs(const PipelineOutputs& o) {
-    check_mesh_output_path("-o", o.mesh);
+    if (!o.mesh.empty()) check_mesh_output_path("-o", o.mesh);
     if (!o.input_mesh.empty()) check_mesh_output_path("--input-mesh", o.input_mesh);
     if (!o.report.empty()) check_output_folder("--report", o.report);
     if (!o.html.empty()) check_page_output_path("--html", o.html);
@@ -148,7 +148,7 @@ void write_pipeline_outputs(PipelineResult& result, const PipelineOptions& optio
                             const VolumeSource& source, const ProgressCallback& progress) {
     StageClock clock(progress);
     clock.start("write");
-    write_mesh(outputs.mesh, result_mesh(result, outputs.triangulate));
+    if (!outputs.mesh.empty()) write_mesh(outputs.mesh, result_mesh(result, outputs.triangulate));
     if (!outputs.input_mesh.empty()) write_mesh(outputs.input_mesh, result_mesh(result, outputs.triangulate, true));
     if (!outputs.normals.empty())
         write_normals_file(outputs.normals, result.surface, result.field.normals, result.field.description);

@@ -149,8 +149,8 @@ def test_bad_input_raises_value_error(mask, options, message):
     "options, message",
     [
         ({"radious": 3.0}, "unexpected keyword argument 'radious'; did you mean radius="),
-        ({"report": "r.json"}, "Mesh.report holds the report"),
-        ({"triangulate": True}, "Mesh.triangles()"),
+        ({"output": "out.ply"}, "Mesh.write(path) writes it"),
+        ({"quiet": True}, "progress= receives the stages"),
         ({"clamp": "yes"}, "clamp= takes True or False"),
         ({"radius": True}, "radius= takes a value"),
         ({"raw_dims": (1, 2)}, "raw_dims= takes 3 values"),

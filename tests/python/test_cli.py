@@ -143,3 +143,29 @@ def test_every_eval_flag_is_a_keyword_or_argument(cli):
     flags = help_flags(cli, "eval")
     keywords = {f.name for f in dsreg._EVALUATION_FLAGS.values() if f.name not in dsreg.EXCLUDED_EVALUATION_FLAGS}
     assert flags == keywords | set(dsreg.EXCLUDED_EVALUATION_FLAGS)
+
+
+def test_file_options_write_what_the_command_line_writes(cli, tmp_path):
+    """report=, input_mesh=, html=, export_normals= write their files as the flags do;
+    triangulate=True returns the triangles the command line writes."""
+    raw = tmp_path / "mask.raw"
+    dims = write_raw(raw, MASK)
+    cli("regularize", raw, "--raw-dims", dims, "--triangulate", "-o", tmp_path / "cli.ply",
+        "--input-mesh", tmp_path / "cli-digital.obj", "--export-normals", tmp_path / "cli-u.txt", "-q")
+    files = {name: tmp_path / f"py.{name}" for name in ("json", "obj", "html", "txt")}
+    stages = []
+    mesh = dsreg.regularize(MASK, triangulate=True, report=files["json"], input_mesh=files["obj"], html=files["html"],
+                            export_normals=files["txt"], progress=lambda stage, fraction: stages.append(stage))
+    assert stages[-2:] == ["write", "write"]
+    written = json.loads(files["json"].read_text())
+    assert written["counts"] == mesh.report["counts"] and written["outputs"]["html"] == str(files["html"])
+    assert mesh.report["parameters"]["triangulate"] is True and "write" in mesh.report["seconds"]
+    expected = dsreg.read_mesh(tmp_path / "cli.ply")
+    np.testing.assert_array_equal(mesh.faces, expected.faces)
+    np.testing.assert_allclose(mesh.vertices, expected.vertices, atol=1e-9)
+    digital, cli_digital = dsreg.read_mesh(files["obj"]), dsreg.read_mesh(tmp_path / "cli-digital.obj")
+    np.testing.assert_array_equal(digital.vertices, cli_digital.vertices)
+    assert files["txt"].read_text().splitlines()[1:] == (tmp_path / "cli-u.txt").read_text().splitlines()[1:]
+    assert files["html"].read_text().startswith("<!DOCTYPE html>")
+    with pytest.raises(ValueError, match="--input-mesh .*unsupported mesh format"):
+        dsreg.regularize(MASK, input_mesh=tmp_path / "digital.xyz")

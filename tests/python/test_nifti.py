@@ -122,3 +122,14 @@ def test_mesh_written_and_read_back(tmp_path):
         np.testing.assert_array_equal(back.faces, mesh.faces)
         np.testing.assert_allclose(back.vertices, mesh.vertices, rtol=0, atol=1e-12)
     assert signed_volume(dsreg.read_mesh(tmp_path / "mesh.ply")) > 0
+
+
+@pytest.mark.parametrize("name", list(AFFINES))
+def test_digital_surface_is_on_voxel_corners_of_the_world_grid(tmp_path, name):
+    """input_mesh= writes the digital surface in the world too: mapped back by the inverse
+    affine, its vertices are voxel corners, (i ± 1/2, j ± 1/2, k ± 1/2)."""
+    affine = AFFINES[name]
+    mask = world_sphere_mask(affine, (20, 22, 24), nib.affines.apply_affine(affine, (10, 11, 12)), 6.5)
+    dsreg.regularize(mask, affine=affine, input_mesh=tmp_path / "digital.ply")
+    corners = nib.affines.apply_affine(np.linalg.inv(affine), dsreg.read_mesh(tmp_path / "digital.ply").vertices)
+    np.testing.assert_allclose(corners - 0.5, np.round(corners - 0.5), atol=1e-9)
