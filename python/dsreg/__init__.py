@@ -62,6 +62,8 @@ from ._flags import flag_table as _flag_table  # noqa: E402
 from ._flags import keyword_docs as _keyword_docs  # noqa: E402
 from ._mesh import Mesh  # noqa: E402
 
+Mesh.__module__ = __name__  # shown as dsreg.Mesh
+
 __all__ = ["Mesh", "regularize", "read_volume", "digitize", "evaluate", "read_mesh", "regularize_keywords"]
 __version__ = _dsreg.__version__
 

@@ -11,6 +11,7 @@ added to the command line is a keyword option at once, with the same checks and 
 import difflib
 import numbers
 import os
+import textwrap
 from typing import Dict, List, Mapping, NamedTuple, Optional
 
 import numpy as np
@@ -99,8 +100,8 @@ def keyword_docs(table: Mapping[str, Flag], keywords) -> str:
     lines = []
     for keyword in keywords:
         flag = table[keyword]
-        kind = "bool" if flag.values == 0 else flag.type.replace(" x ", " × ")
+        kind = "bool" if flag.values == 0 else flag.type + (f" × {flag.values}" if flag.values > 1 else "")
         default = f", default {flag.default}" if flag.default else ""
         lines.append(f"    {keyword} : {kind}{default}  (--{flag.name})")
-        lines.append(f"        {flag.help}")
+        lines.append(textwrap.fill(flag.help, width=96, initial_indent=" " * 8, subsequent_indent=" " * 8))
     return "\n".join(lines)
