@@ -110,3 +110,20 @@ def test_regularize_in_threads():
         t.join()
     for result in results:
         np.testing.assert_allclose(result, expected, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("policy, shown", [(None, "PASSIVE"), ("active", "ACTIVE")])
+def test_openmp_waits_passively_unless_told_otherwise(policy, shown):
+    """import dsreg loads OpenMP with OMP_WAIT_POLICY=passive, as the dsreg command runs, unless
+    the user chose a policy; the variable is not left in the environment (OpenMP's own
+    OMP_DISPLAY_ENV shows the policy it runs with)."""
+    import subprocess
+
+    env = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
+    env["OMP_DISPLAY_ENV"] = "TRUE"
+    if policy:
+        env["OMP_WAIT_POLICY"] = policy
+    code = "import os, dsreg; print(os.environ.get('OMP_WAIT_POLICY'))"
+    result = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    assert f"OMP_WAIT_POLICY = '{shown}'" in result.stderr
+    assert result.stdout.strip() == str(policy)
