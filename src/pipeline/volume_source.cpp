@@ -136,8 +136,6 @@ auto read_within_limits(const VolumeSource& o, Read&& read) {
     const bool memory_bound = limits.max_voxels < o.max_voxels;
     try {
         return read(limits);
-    } catch (const FileError&) {
-        throw;
     } catch (const Error& error) {
         const std::string message = error.what();
         if (memory_bound && message.find("exceed the limit of") != std::string::npos)
