@@ -221,8 +221,8 @@ def read_volume(path, *, spacing=None, **options):
     Returns
     -------
     values : numpy.ndarray, float32, shape (nx, ny, nz)
-        Indexed ``[i, j, k]`` with i along x; Fortran order (x fastest, as in the file), so that
-        regularize reads it without a copy. Integers up to 2^24 are exact.
+        Indexed ``[i, j, k]`` with i along x; Fortran order (x fastest, as in the file and in
+        dsreg's mask, so that regularize reads it in order). Integers up to 2^24 are exact.
     affine : numpy.ndarray, (4, 4) float64
         Voxel-to-world matrix of the command line's frame: voxel (i, j, k) is centred at
         ``affine @ (i, j, k, 1)`` = origin + spacing * (i, j, k).
