@@ -182,6 +182,15 @@ py::dict regularize(const py::object& input, const std::vector<std::string>& arg
     return d;
 }
 
+/// The voxel-to-world affine of `grid` with axis directions `direction`.
+Eigen::Matrix4d grid_affine(const VoxelGrid& grid, const Eigen::Matrix3d& direction) {
+    GridPlacement placement;
+    placement.spacing = grid.spacing;
+    placement.origin = grid.origin;
+    placement.direction = direction;
+    return placement_affine(placement);
+}
+
 /// (values float32 [i, j, k], affine) of a volume file.
 py::tuple read_volume(const std::string& path, const std::vector<std::string>& args,
                       const std::optional<Eigen::Vector3d>& spacing) {
@@ -195,11 +204,8 @@ py::tuple read_volume(const std::string& path, const std::vector<std::string>& a
         py::gil_scoped_release release;
         volume = load_volume_values(source);
     }
-    GridPlacement placement;
-    placement.spacing = volume.grid.spacing;
-    placement.origin = volume.grid.origin;
-    py::array values = fortran_array(std::move(volume.values), volume.grid.dims, py::dtype::of<float>());
-    return py::make_tuple(values, placement_affine(placement));
+    const Eigen::Matrix4d affine = grid_affine(volume.grid, Eigen::Matrix3d::Identity());
+    return py::make_tuple(fortran_array(std::move(volume.values), volume.grid.dims, py::dtype::of<float>()), affine);
 }
 
 /// (mask bool [i, j, k], affine) of a shape digitized as --shape does it (flags --shape, --h, --box, ...).
@@ -211,12 +217,9 @@ py::tuple digitize(const std::vector<std::string>& args) {
         py::gil_scoped_release release;
         loaded = load_volume(job.command.source);
     }
-    GridPlacement placement;
-    placement.spacing = loaded.volume.grid.spacing;
-    placement.origin = loaded.volume.grid.origin;
-    placement.direction = loaded.direction;
-    py::array mask = fortran_array(std::move(loaded.volume.mask), loaded.volume.grid.dims, py::dtype("bool"));
-    return py::make_tuple(mask, placement_affine(placement));
+    const Eigen::Matrix4d affine = grid_affine(loaded.volume.grid, loaded.direction);
+    return py::make_tuple(fortran_array(std::move(loaded.volume.mask), loaded.volume.grid.dims, py::dtype("bool")),
+                          affine);
 }
 
 /// The `dsreg eval --json` object (as JSON text) of a mesh against the flags' shape.
