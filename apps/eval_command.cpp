@@ -94,9 +94,9 @@ void add_evaluation_flags(CLI::App& command, EvaluationRequest& request) {
 void add_eval_command(CLI::App& app) {
     auto options = std::make_shared<EvalOptions>();
     CLI::App* cmd = app.add_subcommand(
-        "eval", "Measure a mesh (OBJ/OFF/PLY/STL, from dsreg or any tool) against an implicit shape: vertex distance, "
+        "eval", "Measure a mesh (OBJ/OFF/PLY/STL/VTK/VTP, from dsreg or any tool) against an implicit shape: vertex distance, "
                 "normal error, volume, voxel classification, triangle angles");
-    cmd->add_option("mesh", options->mesh, "Mesh file: .obj .off .ply .stl (triangles and/or quads)")->required();
+    cmd->add_option("mesh", options->mesh, "Mesh file: .obj .off .ply .stl .vtk .vtp (triangles and/or quads)")->required();
     add_evaluation_flags(*cmd, options->request);
     cmd->add_flag("--json", options->json, "Print one JSON object instead of the table");
     cmd->callback([options] { run(*options); });

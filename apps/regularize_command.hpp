@@ -21,6 +21,7 @@ struct CliFlags {
     std::vector<double> spacing;
     std::string solver = "auto";
     int connectivity = 26;
+    std::string space = "lps";
     bool quiet = false, verbose = false;
 };
 
@@ -32,7 +33,7 @@ struct RegularizeCommand {
 };
 
 /// Registers the flags of the pipeline on `command`, writing into `c`: the volume source (but
-/// the input file), --connectivity, the normal field, the regularization extensions, the
+/// the input file), --space, --connectivity, the normal field, the regularization extensions, the
 /// weights, --solver and the optional outputs (--input-mesh, --report, --export-normals,
 /// --features, --triangulate); not -o, --quiet, --verbose. The one definition of these flags:
 /// `dsreg regularize` and the Python module's keyword options (dsreg.regularize) both parse them.

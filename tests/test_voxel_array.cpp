@@ -1,6 +1,6 @@
 // A caller's array as the pipeline's input (voxel_array.hpp, grid_placement.hpp, VolumeSource::array):
-// every value type, byte order and stride thresholds to the same mask; affines split and move
-// meshes into the world; the pipeline on an array equals the pipeline on the same mask.
+// every value type, byte order and stride thresholds to the same mask; affines (LPS or RAS) give
+// the grid's spacing, origin and direction cosines and back; the pipeline on an array equals the pipeline on the same mask.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -181,30 +181,40 @@ Eigen::Matrix4d oblique_mirrored_affine() {
     return affine;
 }
 
-TEST(GridPlacement, AffineSplitsIntoSpacingOriginAndDirectionAndBack) {
+TEST(GridPlacement, AffineSplitsIntoSpacingOriginAndDirectionAndBackInLpsAndRas) {
     const Eigen::Matrix4d affine = oblique_mirrored_affine();
-    const GridPlacement p = placement_from_affine(affine);
-    EXPECT_TRUE(p.spacing.isApprox(Eigen::Vector3d(0.5, 2, 1.5), 1e-14));
-    EXPECT_TRUE(p.origin.isApprox(Eigen::Vector3d(10, -20, 30)));
-    EXPECT_TRUE((p.direction.transpose() * p.direction).isIdentity(1e-14));
-    EXPECT_LT(p.direction.determinant(), 0);
-    EXPECT_TRUE(placement_affine(p).isApprox(affine, 1e-14));
+    const VoxelGrid grid = grid_from_affine(kDims, affine);
+    EXPECT_EQ(grid.dims, kDims);
+    EXPECT_TRUE(grid.spacing.isApprox(Eigen::Vector3d(0.5, 2, 1.5), 1e-14));
+    EXPECT_TRUE(grid.origin.isApprox(Eigen::Vector3d(10, -20, 30)));
+    EXPECT_TRUE((grid.direction.transpose() * grid.direction).isIdentity(1e-14));
+    EXPECT_LT(grid.direction.determinant(), 0);
+    EXPECT_TRUE(grid_affine(grid).isApprox(affine, 1e-14));
+    // The same placement given as nibabel gives it (RAS = diag(-1,-1,1) LPS) is the same grid.
+    const Eigen::Matrix4d ras_affine = Eigen::Vector4d(-1, -1, 1, 1).asDiagonal() * affine;
+    const VoxelGrid from_ras = grid_from_affine(kDims, ras_affine, OutputSpace::Ras);
+    EXPECT_TRUE(from_ras.direction.isApprox(grid.direction, 1e-14));
+    EXPECT_TRUE(from_ras.origin.isApprox(grid.origin, 1e-14));
+    EXPECT_TRUE(grid_affine(grid, OutputSpace::Ras).isApprox(ras_affine, 1e-14));
+    // In voxel coordinates voxel (i,j,k) is at (i,j,k).
+    EXPECT_TRUE(grid_affine(grid, OutputSpace::Voxel).isApprox(Eigen::Matrix4d::Identity(), 1e-14));
 }
 
 TEST(GridPlacement, RefusesWhatIsNoVoxelToWorldAffineOfPerpendicularAxes) {
     Eigen::Matrix4d sheared = Eigen::Matrix4d::Identity();
     sheared(0, 1) = 0.01;  // 0.57 degrees off
-    EXPECT_THROW(placement_from_affine(sheared), Error);
-    sheared(0, 1) = 1e-5;  // float32 rounding: accepted
-    EXPECT_NO_THROW(placement_from_affine(sheared));
+    EXPECT_THROW(grid_from_affine(kDims, sheared), Error);
+    sheared(0, 1) = 1e-5;  // float32 rounding: accepted, and orthonormalized
+    EXPECT_LT(orthonormality_error(grid_from_affine(kDims, sheared).direction), 1e-14);
     Eigen::Matrix4d projective = Eigen::Matrix4d::Identity();
     projective(3, 0) = 1;
-    EXPECT_THROW(placement_from_affine(projective), Error);
-    EXPECT_THROW(placement_from_affine(Eigen::Vector4d(1, 1, 0, 1).asDiagonal()), Error);
-    EXPECT_THROW(placement_from_affine(Eigen::Vector4d(1, NAN, 1, 1).asDiagonal()), Error);
+    EXPECT_THROW(grid_from_affine(kDims, projective), Error);
+    EXPECT_THROW(grid_from_affine(kDims, Eigen::Vector4d(1, 1, 0, 1).asDiagonal()), Error);
+    EXPECT_THROW(grid_from_affine(kDims, Eigen::Vector4d(1, NAN, 1, 1).asDiagonal()), Error);
+    EXPECT_THROW(grid_from_affine(kDims, Eigen::Matrix4d::Identity(), OutputSpace::Voxel), Error);
 }
 
-TEST(GridPlacement, MovingToTheWorldKeepsFacesOutwardAndNormalsOnThem) {
+TEST(GridPlacement, AMeshOfAnAffinePlacedGridGoesToTheWorldWithFacesOutward) {
     // A unit cube's faces, outward in the grid frame; mirrored and rotated into the world.
     PolygonMesh cube;
     cube.vertices.resize(8, 3);
@@ -213,8 +223,8 @@ TEST(GridPlacement, MovingToTheWorldKeepsFacesOutwardAndNormalsOnThem) {
     cube.faces << 0, 2, 3, 1, 4, 5, 7, 6, 0, 1, 5, 4, 2, 6, 7, 3, 0, 4, 6, 2, 1, 3, 7, 5;
     cube.face_normals.resize(6, 3);
     cube.face_normals << 0, 0, -1, 0, 0, 1, 0, -1, 0, 0, 1, 0, -1, 0, 0, 1, 0, 0;
-    const GridPlacement p = placement_from_affine(oblique_mirrored_affine());
-    const PolygonMesh world = move_to_world(cube, p.direction, p.origin);
+    const VoxelGrid grid = grid_from_affine(kDims, oblique_mirrored_affine());
+    const PolygonMesh world = mesh_in_space(cube, grid, OutputSpace::Lps);
     for (int f = 0; f < 6; ++f) {
         const auto corner = [&](int n) { return Eigen::Vector3d(world.vertices.row(world.faces(f, n))); };
         const Eigen::Vector3d right_hand = (corner(1) - corner(0)).cross(corner(2) - corner(0)).normalized();
@@ -222,10 +232,11 @@ TEST(GridPlacement, MovingToTheWorldKeepsFacesOutwardAndNormalsOnThem) {
         const Eigen::Vector3d centre = world.vertices.colwise().mean();
         EXPECT_GT(right_hand.dot(corner(0) - centre), 0) << "face " << f << " points inward";
     }
-    EXPECT_TRUE(Eigen::Vector3d(world.vertices.row(0)).isApprox(p.origin + p.direction * (Eigen::Vector3d::Zero() - p.origin)));
-    const PolygonMesh unchanged = move_to_world(cube, Eigen::Matrix3d::Identity(), p.origin);
-    EXPECT_EQ(unchanged.vertices, cube.vertices);
-    EXPECT_EQ(unchanged.faces, cube.faces);
+    // Grid-frame point p = origin + spacing ⊙ index is at affine · index in the world.
+    const Eigen::Vector3d index(0.25, -1.5, 2);
+    const Eigen::Vector3d p = grid.origin + grid.spacing.cwiseProduct(index);
+    const Eigen::Vector4d expected = oblique_mirrored_affine() * index.homogeneous();
+    EXPECT_TRUE(grid_to_space(grid, OutputSpace::Lps).apply(p).isApprox(expected.head<3>(), 1e-12));
 }
 
 TEST(ArraySource, PipelineOnAnArrayEqualsThePipelineOnItsMask) {
@@ -262,7 +273,7 @@ TEST(ArraySource, EmptyObjectAndPlacementErrorsNameTheProblem) {
         return std::string("no error");
     };
     EXPECT_EQ(message(), "mask 4x4x4 int16: the object is empty: no voxel has value >= 6; its values range from 5 to 5 "
-                         "(choose the object's values with --min and --max)");
+                         "(choose the object's values with --label, --min and --max)");
     source.min_value.reset();
     source.spacing = Eigen::Vector3d(1, NAN, 1);
     EXPECT_EQ(message(), "--spacing: every voxel size must be positive and finite");

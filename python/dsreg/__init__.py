@@ -9,10 +9,13 @@ well shaped. This package is the C++ library behind the ``dsreg`` command, on nu
 Conventions
 -----------
 - A volume is a 3-D array indexed ``[i, j, k]`` with i along x, j along y, k along z (nibabel's
-  convention: ``nibabel.load(f).get_fdata()`` and ``img.affine`` can be passed as they are).
+  convention: ``nibabel.load(f).get_fdata()`` and ``img.affine`` can be passed as they are, with
+  ``affine_space="ras"``).
 - Voxel (i, j, k) is centred at ``affine @ (i, j, k, 1)``; without an affine, at
-  ``origin + spacing * (i, j, k)``. Mesh vertices are voxel corners moved by the regularization,
-  in the same physical units and world frame.
+  ``origin + spacing * (i, j, k)``. An affine maps to LPS (ITK, SimpleITK, DICOM, 3D Slicer, and
+  what read_volume returns) unless ``affine_space="ras"`` (nibabel). Mesh vertices are voxel
+  corners moved by the regularization, in the affine's space by default, or in ``space=`` (lps,
+  ras, voxel: the command line's --space).
 - Faces are counter-clockwise seen from outside.
 - Keyword options are the command line's flags: ``--ii-kernel ball`` is ``ii_kernel="ball"``.
 - Bad arguments or content raise ValueError with the command line's message; files that cannot
@@ -87,7 +90,7 @@ EXCLUDED_EVALUATION_FLAGS = {
     "json": "evaluate() returns the JSON content as a dict",
 }
 
-_VOLUME_KEYWORDS = ("raw_dims", "raw_type", "raw_big_endian", "raw_header_bytes", "max_voxels", "max_memory")
+_VOLUME_KEYWORDS = ("space", "raw_dims", "raw_type", "raw_big_endian", "raw_header_bytes", "max_voxels", "max_memory")
 _DIGITIZE_KEYWORDS = ("box", "max_voxels", "max_memory")
 
 
@@ -126,7 +129,7 @@ def _volume_input(mask):
     return _np.asarray(mask)
 
 
-def regularize(mask, *, affine=None, spacing=None, origin=None, progress=None, **options) -> Mesh:
+def regularize(mask, *, affine=None, affine_space="lps", spacing=None, origin=None, progress=None, **options) -> Mesh:
     """The regularized boundary mesh of the object of a 3-D volume.
 
     Parameters
@@ -134,17 +137,24 @@ def regularize(mask, *, affine=None, spacing=None, origin=None, progress=None, *
     mask : array_like (3-D), str or os.PathLike, or None
         The volume, indexed ``[i, j, k]`` with i along x (nibabel's convention), of any memory
         order and strides: bool, any integer or float dtype (float16 to float64), either byte
-        order. The object is the voxels with value > 0, or with ``min <= value <= max`` when
-        ``min=`` or ``max=`` is given (the command line's --min/--max). The array is read in
+        order. The object is the voxels with value > 0, or equal to ``label=`` (one label of a
+        label map), or with ``min <= value <= max`` when ``min=`` or ``max=`` is given (the
+        command line's --label, --min, --max). The array is read in
         place and thresholded into one 1-byte mask: it is not copied otherwise, and must not be
         changed by another thread during the call.
         A path instead reads a volume file as ``dsreg regularize FILE`` does (any format it
-        reads; ``raw_dims=`` etc. for ``.raw``). None with ``shape=`` digitizes an implicit
+        reads: NIfTI, NRRD, MetaImage, TIFF, HDF5, VTK, DICOM, .npy, .vol, .longvol, .pgm3d,
+        .raw with ``raw_dims=`` etc.). None with ``shape=`` digitizes an implicit
         shape as ``dsreg regularize --shape`` does (``h=``, ``box=``).
     affine : array_like (4, 4), optional
-        Voxel-to-world matrix of the array (nibabel's ``img.affine``): voxel (i, j, k) is centred
-        at ``affine @ (i, j, k, 1)``. Its columns may be oblique or mirrored but must be
-        perpendicular. The vertices come out in this world frame. Not with spacing or origin.
+        Voxel-to-world matrix of the array: voxel (i, j, k) is centred at
+        ``affine @ (i, j, k, 1)`` in ``affine_space``. Its columns may be oblique or mirrored but
+        must be perpendicular (within 1e-3, as the file readers accept direction cosines). By
+        default the vertices come out in this world. Not with spacing or origin.
+    affine_space : {"lps", "ras"}
+        The world the affine maps to: "lps" (default: read_volume's affine, ITK, SimpleITK,
+        DICOM) or "ras" (nibabel's ``img.affine``). It is also the default of ``space=``, so
+        that the vertices come in the affine's space and ``Mesh.coordinate_system`` names it.
     spacing : float or array_like (3,), optional
         Voxel size along i, j, k in physical units (default 1; for a file, overrides the file's
         as --spacing does).
@@ -160,7 +170,10 @@ def regularize(mask, *, affine=None, spacing=None, origin=None, progress=None, *
         ``--raw-dims 4,5,6``; a switch such as ``clamp=True`` is ``--clamp``; None leaves the
         default). Lengths (radius, h, box) are in physical units. The flags that write files
         (``report=``, ``html=``, ``input_mesh=``, ``export_normals=``, ``features=``) write them
-        as the command line does, after the run (a "write" stage).
+        as the command line does, after the run (a "write" stage). ``space=`` ("lps", "ras" or
+        "voxel", the command line's --space) chooses the coordinates of the vertices: the same
+        mesh as ``dsreg regularize FILE --space S`` for ``regularize(*read_volume(FILE),
+        space=S)`` (read_volume returns an LPS affine) or ``regularize(FILE, space=S)``.
 
     Returns
     -------
@@ -188,14 +201,22 @@ def regularize(mask, *, affine=None, spacing=None, origin=None, progress=None, *
     Examples
     --------
     >>> img = nibabel.load("seg.nii.gz")
-    >>> mesh = dsreg.regularize(img.get_fdata() == 3, affine=img.affine, radius=4.0)
-    >>> mesh.write("structure3.ply")
+    >>> mesh = dsreg.regularize(img.get_fdata(), label=3, affine=img.affine, affine_space="ras", radius=4.0)
+    >>> mesh.write("structure3.vtk")  # RAS vertices, tagged SPACE=RAS for 3D Slicer
     """
+    if options.get("space") is None and affine is not None:
+        options["space"] = affine_space  # the vertices come in the affine's space
     args = _flag_arguments("regularize", _REGULARIZE_FLAGS, options, excluded=EXCLUDED_REGULARIZE_FLAGS)
     if progress is not None and not callable(progress):
         raise TypeError(f"progress= takes a callable (stage, fraction), not {type(progress).__name__}")
     arrays = _dsreg.regularize(
-        _volume_input(mask), args, _affine(affine), _vector3("spacing", spacing), _vector3("origin", origin), progress
+        _volume_input(mask),
+        args,
+        _affine(affine),
+        str(affine_space),
+        _vector3("spacing", spacing),
+        _vector3("origin", origin),
+        progress,
     )
     return Mesh._from_arrays(arrays, _json.loads(arrays["report"]))
 
@@ -211,12 +232,16 @@ def read_volume(path, *, spacing=None, **options):
     Parameters
     ----------
     path : str or os.PathLike
-        Any format ``dsreg regularize`` reads (.vol, .longvol, .pgm3d, .raw).
+        Any format ``dsreg regularize`` reads, through the same readers: NIfTI-1/2 (.nii,
+        .nii.gz, .hdr/.img), NRRD (.nrrd, .nhdr), MetaImage (.mha, .mhd), TIFF, HDF5 (.h5),
+        VTK images (.vtk), DICOM (a folder holding one series, or a .dcm file), NumPy .npy,
+        DGtal's .vol, .longvol, .pgm3d, and .raw (with ``raw_dims=``...).
     spacing : float or array_like (3,), optional
         Overrides the file's voxel size (--spacing).
     **options
-        raw_dims, raw_type, raw_big_endian, raw_header_bytes (the layout of a .raw file),
-        max_voxels, max_memory: the command line's flags.
+        space ("lps", the default, "ras" or "voxel": the space the affine maps to, as the
+        command line's --space), raw_dims, raw_type, raw_big_endian, raw_header_bytes (the
+        layout of a .raw file), max_voxels, max_memory: the command line's flags.
 
     Returns
     -------
@@ -224,8 +249,12 @@ def read_volume(path, *, spacing=None, **options):
         Indexed ``[i, j, k]`` with i along x; Fortran order (x fastest, as in the file and in
         dsreg's mask, so that regularize reads it in order). Integers up to 2^24 are exact.
     affine : numpy.ndarray, (4, 4) float64
-        Voxel-to-world matrix of the command line's frame: voxel (i, j, k) is centred at
-        ``affine @ (i, j, k, 1)`` = origin + spacing * (i, j, k).
+        Voxel-to-world matrix: voxel (i, j, k) is centred at ``affine @ (i, j, k, 1)`` in LPS
+        (origin + direction @ (spacing * (i, j, k)) with the file's direction cosines, as ITK
+        reads them; the identity direction for the DGtal formats, .raw and .npy), in RAS with
+        ``space="ras"`` (nibabel's ``img.affine`` of a NIfTI file), or the identity with
+        ``space="voxel"``. ``regularize(values, affine=affine)`` then meshes the file as the
+        command line does (pass ``affine_space="ras"`` with a RAS affine).
     """
     args = _flag_arguments("read_volume", _REGULARIZE_FLAGS, options, allowed=_VOLUME_KEYWORDS)
     return _dsreg.read_volume(_os.fspath(path), args, _vector3("spacing", spacing))
@@ -293,10 +322,11 @@ def evaluate(mesh, shape: str, h=None, **options) -> dict:
 
 
 def read_mesh(path) -> Mesh:
-    """A mesh file (.obj, .off, .ply, .stl; triangles and/or quads) as a Mesh.
+    """A mesh file (.obj, .off, .ply, .stl, .vtk, .vtp; triangles and/or quads) as a Mesh.
 
     Files mixing triangles and quads come back as triangles (the quads split along their shorter
     diagonal). PLY face properties nx ny nz become face_normals, other vertex properties
-    vertex_scalars. Raises OSError if the file cannot be read, ValueError if it is malformed.
+    vertex_scalars (VTK: cell normals and point scalars); coordinate_system is read where 3D
+    Slicer writes it. Raises OSError if the file cannot be read, ValueError if it is malformed.
     """
     return Mesh._from_arrays(_dsreg.read_mesh(_os.fspath(path)))

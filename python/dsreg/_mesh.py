@@ -34,9 +34,10 @@ class Mesh:
     Attributes
     ----------
     vertices : numpy.ndarray, (n, 3) float64
-        Vertex positions in physical units, in the world frame of the input: for an array, the
-        frame of its ``affine`` (or ``origin`` + ``spacing`` ⊙ (i, j, k)); for a file, the
-        command line's (origin + spacing ⊙ index).
+        Vertex positions, in the space regularize() was asked for (``space=``, the command line's
+        --space): by default the world of the input's affine (LPS for a file, as the command
+        line writes it; for an array, the space of its ``affine``, or ``origin`` + ``spacing`` ⊙
+        (i, j, k)), in physical units; or voxel coordinates (voxel centres at integers).
     faces : numpy.ndarray, (m, 4) or (m, 3) int64
         Vertex indices of each face, counter-clockwise seen from outside (the right-hand normal
         points out of the object).
@@ -46,12 +47,16 @@ class Mesh:
     vertex_scalars : dict of str to numpy.ndarray (n,) float64
         Named per-vertex values, e.g. ``"v"``, the feature map of ``normals="at"`` (near 0 on
         sharp edges, 1 elsewhere).
+    coordinate_system : str
+        "LPS" or "RAS" when the vertices are in a named world space (medical files, arrays given
+        with an affine), else "" (voxel coordinates, DGtal files, shapes, plain arrays).
+        ``write`` records it where 3D Slicer reads it ("SPACE=LPS"); ``read_mesh`` restores it.
     report : dict
         For a result of dsreg.regularize, the command line's ``--report`` content: counts, grid,
         parameters, solve, energies, per-stage seconds, peak memory. Empty otherwise.
     """
 
-    def __init__(self, vertices, faces, face_normals=None, vertex_scalars=None, report=None):
+    def __init__(self, vertices, faces, face_normals=None, vertex_scalars=None, report=None, coordinate_system=""):
         self.vertices = _points("vertices", vertices)
         self.faces = _faces(faces, len(self.vertices))
         self.face_normals = None if face_normals is None else _points("face_normals", face_normals, len(self.faces))
@@ -62,6 +67,9 @@ class Mesh:
                 raise ValueError(f"vertex_scalars[{name!r}]: {len(self.vertices)} values are needed (got shape {array.shape})")
             self.vertex_scalars[name] = array
         self.report = dict(report or {})
+        if coordinate_system not in ("", "LPS", "RAS"):
+            raise ValueError(f"coordinate_system: 'LPS', 'RAS' or '' (got {coordinate_system!r})")
+        self.coordinate_system = coordinate_system
 
     @classmethod
     def _from_arrays(cls, arrays: dict, report=None) -> "Mesh":
@@ -73,6 +81,7 @@ class Mesh:
         mesh.face_normals = normals if len(normals) else None
         mesh.vertex_scalars = dict(arrays["vertex_scalars"])
         mesh.report = dict(report or {})
+        mesh.coordinate_system = arrays.get("coordinate_system", "")
         return mesh
 
     def _arrays(self):
@@ -89,19 +98,23 @@ class Mesh:
         """The mesh with each quad split along its shorter diagonal into two triangles (the
         command line's ``--triangulate``), orientation kept; face normals are repeated for both
         halves. A triangle mesh is returned as it is."""
-        return Mesh._from_arrays(_dsreg.triangulate(*self._arrays()), self.report)
+        mesh = Mesh._from_arrays(_dsreg.triangulate(*self._arrays()), self.report)
+        mesh.coordinate_system = self.coordinate_system
+        return mesh
 
     def write(self, path) -> None:
         """Write the mesh to `path`, in the format of its extension (the command line's -o):
 
         - ``.obj``, ``.off``: vertices and faces (quads stay quads);
         - ``.ply``: binary, with the face normals as nx ny nz and the vertex scalars;
-        - ``.stl``: binary triangles (quads split along their shorter diagonal).
+        - ``.stl``: binary triangles (quads split along their shorter diagonal);
+        - ``.vtk`` (legacy, binary), ``.vtp`` (VTK XML): 3D Slicer's model formats, quads kept,
+          face normals as cell data "u", vertex scalars as point data.
 
-        The file is written under a temporary name and renamed when complete. Raises OSError if
+        coordinate_system ("LPS"/"RAS") is recorded as 3D Slicer records it. The file is written under a temporary name and renamed when complete. Raises OSError if
         it cannot be written, ValueError for an unknown extension.
         """
-        _dsreg.write_mesh(os.fspath(path), *self._arrays())
+        _dsreg.write_mesh(os.fspath(path), *self._arrays(), self.coordinate_system)
 
     def __repr__(self) -> str:
         kind = {3: "triangles", 4: "quads"}.get(self.faces.shape[1], "faces")

@@ -22,6 +22,7 @@
 #include "dsreg/mesh_io.hpp"
 #include "dsreg/pipeline.hpp"
 #include "dsreg/progress.hpp"
+#include "dsreg/world_space.hpp"
 #include "eval_command.hpp"
 #include "numpy_arrays.hpp"
 #include "regularize_command.hpp"
@@ -91,12 +92,15 @@ py::dict mesh_dict(PolygonMesh&& mesh) {
     d["faces"] = py::cast(index_matrix(mesh.faces));
     d["face_normals"] = py::cast(std::move(mesh.face_normals));
     d["vertex_scalars"] = scalars;
+    d["coordinate_system"] = mesh.coordinate_system;
     return d;
 }
 
 PolygonMesh polygon_mesh(PointMatrix vertices, FaceMatrix faces, PointMatrix face_normals,
-                         std::vector<std::pair<std::string, Eigen::VectorXd>> vertex_scalars) {
-    return PolygonMesh{std::move(vertices), std::move(faces), std::move(face_normals), std::move(vertex_scalars)};
+                         std::vector<std::pair<std::string, Eigen::VectorXd>> vertex_scalars,
+                         std::string coordinate_system = "") {
+    return PolygonMesh{std::move(vertices), std::move(faces), std::move(face_normals), std::move(vertex_scalars),
+                       std::move(coordinate_system)};
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -145,8 +149,9 @@ private:
 
 /// `input`: a numpy array, a path (str) or None (with --shape among the flags).
 py::dict regularize(const py::object& input, const std::vector<std::string>& args,
-                    const std::optional<Eigen::Matrix4d>& affine, const std::optional<Eigen::Vector3d>& spacing,
-                    const std::optional<Eigen::Vector3d>& origin, const py::object& progress) {
+                    const std::optional<Eigen::Matrix4d>& affine, const std::string& affine_space,
+                    const std::optional<Eigen::Vector3d>& spacing, const std::optional<Eigen::Vector3d>& origin,
+                    const py::object& progress) {
     Regularize job;
     job.parse(args);
     VolumeSource& source = job.command.source;
@@ -158,6 +163,8 @@ py::dict regularize(const py::object& input, const std::vector<std::string>& arg
         source.array = voxel_array_of(*values, "mask");
     }
     source.affine = affine;
+    source.affine_space = parse_output_space(affine_space);
+    if (source.affine_space == OutputSpace::Voxel) throw Error("affine_space: lps or ras (the world the affine maps to), not voxel");
     if (spacing) source.spacing = spacing;
     source.origin = origin;
     const PipelineOptions& options = job.command.options;
@@ -172,7 +179,7 @@ py::dict regularize(const py::object& input, const std::vector<std::string>& arg
         py::gil_scoped_release release;
         PipelineResult result = run_pipeline(source, options, interruption.callback());
         if (outputs.any()) write_pipeline_outputs(result, options, outputs, source, interruption.callback());
-        mesh = result_mesh(result, outputs.triangulate);
+        mesh = output_mesh(result, outputs);
         report = pipeline_report(result, options, outputs, source).dump();
     } catch (const Interrupted&) {
         interruption.raise();
@@ -182,16 +189,7 @@ py::dict regularize(const py::object& input, const std::vector<std::string>& arg
     return d;
 }
 
-/// The voxel-to-world affine of `grid` with axis directions `direction`.
-Eigen::Matrix4d grid_affine(const VoxelGrid& grid, const Eigen::Matrix3d& direction) {
-    GridPlacement placement;
-    placement.spacing = grid.spacing;
-    placement.origin = grid.origin;
-    placement.direction = direction;
-    return placement_affine(placement);
-}
-
-/// (values float32 [i, j, k], affine) of a volume file.
+/// (values float32 [i, j, k], voxel-to---space affine) of a volume file.
 py::tuple read_volume(const std::string& path, const std::vector<std::string>& args,
                       const std::optional<Eigen::Vector3d>& spacing) {
     Regularize job;
@@ -204,7 +202,7 @@ py::tuple read_volume(const std::string& path, const std::vector<std::string>& a
         py::gil_scoped_release release;
         volume = load_volume_values(source);
     }
-    const Eigen::Matrix4d affine = grid_affine(volume.grid, Eigen::Matrix3d::Identity());
+    const Eigen::Matrix4d affine = grid_affine(volume.grid, job.command.outputs.space);
     return py::make_tuple(fortran_array(std::move(volume.values), volume.grid.dims, py::dtype::of<float>()), affine);
 }
 
@@ -217,7 +215,7 @@ py::tuple digitize(const std::vector<std::string>& args) {
         py::gil_scoped_release release;
         loaded = load_volume(job.command.source);
     }
-    const Eigen::Matrix4d affine = grid_affine(loaded.volume.grid, loaded.direction);
+    const Eigen::Matrix4d affine = grid_affine(loaded.volume.grid);
     return py::make_tuple(fortran_array(std::move(loaded.volume.mask), loaded.volume.grid.dims, py::dtype("bool")),
                           affine);
 }
@@ -242,9 +240,10 @@ py::dict read_mesh_file(const std::string& path) {
 }
 
 void write_mesh_file(const std::string& path, PointMatrix vertices, FaceMatrix faces, PointMatrix face_normals,
-                     std::vector<std::pair<std::string, Eigen::VectorXd>> vertex_scalars) {
-    const PolygonMesh mesh =
-        polygon_mesh(std::move(vertices), std::move(faces), std::move(face_normals), std::move(vertex_scalars));
+                     std::vector<std::pair<std::string, Eigen::VectorXd>> vertex_scalars,
+                     const std::string& coordinate_system) {
+    const PolygonMesh mesh = polygon_mesh(std::move(vertices), std::move(faces), std::move(face_normals),
+                                          std::move(vertex_scalars), coordinate_system);
     py::gil_scoped_release release;
     write_mesh(path, mesh);
 }
@@ -288,14 +287,14 @@ PYBIND11_MODULE(_dsreg, m) {
     py::register_exception_translator(&translate_errors);
     m.def("regularize_flags", [] { return flag_table(Regularize().app); });
     m.def("evaluation_flags", [] { return flag_table(Evaluate().app); });
-    m.def("regularize", &regularize, py::arg("input"), py::arg("args"), py::arg("affine"), py::arg("spacing"),
-          py::arg("origin"), py::arg("progress"));
+    m.def("regularize", &regularize, py::arg("input"), py::arg("args"), py::arg("affine"), py::arg("affine_space"),
+          py::arg("spacing"), py::arg("origin"), py::arg("progress"));
     m.def("read_volume", &read_volume, py::arg("path"), py::arg("args"), py::arg("spacing"));
     m.def("digitize", &digitize, py::arg("args"));
     m.def("evaluate", &evaluate, py::arg("vertices"), py::arg("faces"), py::arg("args"));
     m.def("read_mesh", &read_mesh_file, py::arg("path"));
     m.def("write_mesh", &write_mesh_file, py::arg("path"), py::arg("vertices"), py::arg("faces"),
-          py::arg("face_normals"), py::arg("vertex_scalars"));
+          py::arg("face_normals"), py::arg("vertex_scalars"), py::arg("coordinate_system"));
     m.def("triangulate", &triangulate, py::arg("vertices"), py::arg("faces"), py::arg("face_normals"),
           py::arg("vertex_scalars"));
 }

@@ -8,6 +8,7 @@
 
 #include "dsreg/error.hpp"
 #include "dsreg/grid_placement.hpp"
+#include "dsreg/value_histogram.hpp"
 #include "dsreg/text.hpp"
 #include "dsreg/volume_io.hpp"
 
@@ -116,8 +117,16 @@ LoadedVolume digitize_shape(const VolumeSource& o) {
     return loaded;
 }
 
+/// The object's values: --label N, or --min/--max (default value > 0).
 ValueRange object_range(const VolumeSource& o) {
     ValueRange range;
+    if (o.label) {
+        if (o.min_value || o.max_value) throw Error("--label selects one value: it cannot be combined with --min or --max");
+        if (!std::isfinite(*o.label)) throw Error("--label must be a finite number");
+        range.has_min = range.has_max = true;
+        range.min = range.max = *o.label;
+        return range;
+    }
     if (o.min_value) range.has_min = true, range.min = *o.min_value;
     if (o.max_value) range.has_max = true, range.max = *o.max_value;
     return range;
@@ -147,7 +156,7 @@ auto read_within_limits(const VolumeSource& o, Read&& read) {
 LoadedVolume read_file(const VolumeSource& o) {
     LoadedVolume loaded;
     loaded.volume = read_within_limits(o, [&](const VolumeLimits& limits) {
-        return read_volume(o.input_path, object_range(o), o.raw_layout ? &*o.raw_layout : nullptr, limits);
+        return read_volume(o.input_path, object_range(o), o.raw_layout ? &*o.raw_layout : nullptr, limits, &loaded.file);
     });
     loaded.description = o.input_path;
     if (o.spacing) {
@@ -158,25 +167,25 @@ LoadedVolume read_file(const VolumeSource& o) {
     return loaded;
 }
 
-/// The placement of an array: its affine, or its spacing and origin.
-GridPlacement array_placement(const VolumeSource& o) {
+/// The grid of an array: placed by its affine, or by its spacing and origin.
+VoxelGrid array_grid(const VolumeSource& o) {
     if (o.affine) {
         if (o.spacing || o.origin) throw Error("affine gives the spacing and the origin: do not give them too");
-        return placement_from_affine(*o.affine);
+        return grid_from_affine(o.array->dims, *o.affine, o.affine_space);
     }
-    GridPlacement placement;
-    if (o.spacing) check_spacing(*o.spacing), placement.spacing = *o.spacing;
+    VoxelGrid grid;
+    grid.dims = o.array->dims;
+    if (o.spacing) check_spacing(*o.spacing), grid.spacing = *o.spacing;
     if (o.origin) {
         if (!o.origin->allFinite()) throw Error("origin: every coordinate must be finite");
-        placement.origin = *o.origin;
+        grid.origin = *o.origin;
     }
-    return placement;
+    return grid;
 }
 
 LoadedVolume threshold_array(const VolumeSource& o) {
     const VoxelArray& array = *o.array;
     check_voxel_array(array);
-    const GridPlacement placement = array_placement(o);
     const double voxels = double(array.dims[0]) * double(array.dims[1]) * double(array.dims[2]);
     const std::int64_t cap = memory_voxel_cap(o);
     if (voxels > double(cap))
@@ -184,19 +193,20 @@ LoadedVolume threshold_array(const VolumeSource& o) {
                     std::to_string(cap) + (cap < o.max_voxels ? " that --max-memory " + o.max_memory + " leaves room for"
                                                               : " (--max-voxels)"));
     LoadedVolume loaded;
-    loaded.volume.grid.dims = array.dims;
-    loaded.volume.grid.spacing = placement.spacing;
-    loaded.volume.grid.origin = placement.origin;
+    loaded.volume.grid = array_grid(o);
     loaded.volume.mask = threshold_voxel_array(array, object_range(o));
-    loaded.direction = placement.direction;
     loaded.description = array.description;
-    loaded.h = placement.spacing.maxCoeff();
+    loaded.h = loaded.volume.grid.spacing.maxCoeff();
+    loaded.file.format = "array";
+    loaded.file.value_type = value_type_name(array);
+    loaded.file.world_geometry = o.affine.has_value();
     return loaded;
 }
 
 /// The values that make a voxel of a file part of the object, as the options give them:
 /// "value > 0", "value >= 300", "40 <= value <= 200", "0 < value <= 50".
 std::string object_value_range(const VolumeSource& o) {
+    if (o.label) return "value = " + format_number(*o.label);
     const std::string low = o.min_value ? format_number(*o.min_value) + " <= " : "0 < ";
     const std::string high = o.max_value ? " <= " + format_number(*o.max_value) : "";
     if (!o.max_value) return o.min_value ? "value >= " + format_number(*o.min_value) : "value > 0";
@@ -234,6 +244,25 @@ void check_input_choice(const VolumeSource& o) {
     if (!o.array && (o.affine || o.origin)) throw Error("affine and origin apply to arrays only");
 }
 
+/// The object takes most of the volume: say so, with the value histogram's main modes for a file
+/// (read twice more, streaming, nothing kept per voxel).
+std::string most_of_the_volume_warning(const VolumeSource& o, double fraction) {
+    std::string modes;
+    try {
+        if (!o.array) {
+            VolumeLimits limits;
+            limits.max_voxels = memory_voxel_cap(o);
+            const ValueHistogram histogram = read_value_histogram(o.input_path, o.raw_layout ? &*o.raw_layout : nullptr, limits);
+            modes = describe_modes(histogram_modes(histogram), histogram.integral);
+        }
+    } catch (const std::exception&) {
+        // only a hint
+    }
+    return "the object (" + object_value_range(o) + ") takes " + format("%.0f", 100 * fraction) +
+           "% of the volume: probably the background or the scanner's field of view rather than the intended object" +
+           (modes.empty() ? "" : "; the values' main modes are " + modes) + " (choose the object with --label, --min, --max)";
+}
+
 }  // namespace
 
 LoadedVolume load_volume(const VolumeSource& o) {
@@ -241,19 +270,22 @@ LoadedVolume load_volume(const VolumeSource& o) {
     if (o.max_voxels <= 0) throw Error("--max-voxels must be positive (got " + std::to_string(o.max_voxels) + ")");
     if (!o.shape.empty()) return digitize_shape(o);
     LoadedVolume loaded = o.array ? threshold_array(o) : read_file(o);
-    if (loaded.volume.object_voxel_count() == 0) {
+    const std::int64_t object = loaded.volume.object_voxel_count();
+    if (object == 0) {
         const std::string values = input_value_range(o);
         throw Error(loaded.description + ": the object is empty: no voxel has " + object_value_range(o) +
-                    (values.empty() ? "" : "; " + values) + " (choose the object's values with --min and --max)");
+                    (values.empty() ? "" : "; " + values) + " (choose the object's values with --label, --min and --max)");
     }
+    const double fraction = double(object) / double(loaded.volume.grid.voxel_count());
+    if (fraction > kMostOfTheVolume) loaded.warnings.push_back(most_of_the_volume_warning(o, fraction));
     return loaded;
 }
 
-ScalarVolume load_volume_values(const VolumeSource& o) {
+ScalarVolume load_volume_values(const VolumeSource& o, VolumeFileInfo* info) {
     if (o.input_path.empty()) throw Error("no input: give a volume file");
     if (o.max_voxels <= 0) throw Error("--max-voxels must be positive (got " + std::to_string(o.max_voxels) + ")");
     ScalarVolume values = read_within_limits(o, [&](const VolumeLimits& limits) {
-        return read_volume_values(o.input_path, o.raw_layout ? &*o.raw_layout : nullptr, limits);
+        return read_volume_values(o.input_path, o.raw_layout ? &*o.raw_layout : nullptr, limits, info);
     });
     if (o.spacing) {
         check_spacing(*o.spacing);

@@ -127,7 +127,7 @@ def test_spacing_and_origin_place_the_grid(reference):
         (MASK, {"affine": np.eye(3)}, "affine: a 4 x 4 voxel-to-world matrix is needed"),
         (MASK, {"affine": np.diag([1.0, 1.0, np.nan, 1.0])}, "affine: every entry must be finite"),
         (MASK, {"affine": np.diag([1.0, 0.0, 1.0, 1.0])}, "affine: column 1 is zero"),
-        (MASK, {"affine": [[1, 0.5, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]}, "not perpendicular"),
+        (MASK, {"affine": [[1, 0.5, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]}, "affine: the direction cosines are not orthonormal"),
         (MASK, {"affine": np.eye(4), "spacing": 2.0}, "affine gives the spacing and the origin"),
         (MASK, {"radius": -1.0}, "--radius must be positive"),
         (MASK, {"normals": "sobel"}, "--normals: sobel not in {ii,trivial,ctrivial,exact,at}"),
@@ -168,9 +168,9 @@ def test_missing_file_raises_os_error(tmp_path):
     with pytest.raises(FileNotFoundError) as error:
         dsreg.regularize(tmp_path / "missing.vol")
     assert "missing.vol: cannot open: no such file" in str(error.value)
-    (tmp_path / "folder.vol").mkdir()
-    with pytest.raises(IsADirectoryError):
-        dsreg.read_volume(tmp_path / "folder.vol")
+    (tmp_path / "folder").mkdir()  # a folder is read as a DICOM series, as on the command line
+    with pytest.raises(ValueError, match="no DICOM image series in this folder"):
+        dsreg.read_volume(tmp_path / "folder")
     (tmp_path / "x.xyz").write_text("")
     with pytest.raises(ValueError, match="cannot tell the volume format"):
         dsreg.read_volume(tmp_path / "x.xyz")

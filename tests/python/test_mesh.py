@@ -1,6 +1,8 @@
 """dsreg.Mesh: triangles(), write() in every format of the command line, read_mesh(), and
 interchange with meshio (Debian's python3-meshio)."""
 
+import copy
+
 import meshio
 import numpy as np
 import pytest
@@ -30,11 +32,15 @@ def test_triangles_split_along_the_shorter_diagonal(mesh):
     assert triangles.triangles().faces.shape == triangles.faces.shape
 
 
-@pytest.mark.parametrize("extension", ["obj", "off", "ply", "stl"])
-def test_write_and_read_every_format(tmp_path, mesh, extension):
+@pytest.mark.parametrize("extension", ["obj", "off", "ply", "stl", "vtk", "vtp"])
+@pytest.mark.parametrize("coordinate_system", ["", "LPS", "RAS"])
+def test_write_and_read_every_format(tmp_path, mesh, extension, coordinate_system):
     path = tmp_path / f"m.{extension}"
+    mesh = copy.copy(mesh)  # the module's fixture stays as it is
+    mesh.coordinate_system = coordinate_system
     mesh.write(path)
     back = dsreg.read_mesh(str(path))
+    assert back.coordinate_system == coordinate_system  # recorded where 3D Slicer reads it
     if extension == "stl":  # triangles, positions merged: same surface area
         assert back.faces.shape[1] == 3 and len(back.faces) == 2 * len(mesh.faces)
         area = lambda m: np.linalg.norm(np.cross(*(m.vertices[m.faces[:, n]] - m.vertices[m.faces[:, 0]] for n in (1, 2))), axis=1).sum() / 2
@@ -42,7 +48,7 @@ def test_write_and_read_every_format(tmp_path, mesh, extension):
         return
     np.testing.assert_array_equal(back.faces, mesh.faces)
     np.testing.assert_allclose(back.vertices, mesh.vertices, rtol=0, atol=1e-12)
-    if extension == "ply":
+    if extension in ("ply", "vtk", "vtp"):
         np.testing.assert_allclose(back.face_normals, mesh.face_normals, atol=1e-6)
         np.testing.assert_allclose(back.vertex_scalars["v"], mesh.vertex_scalars["v"], atol=1e-6)
 
@@ -99,8 +105,8 @@ def test_dsreg_reads_what_meshio_writes(tmp_path, mesh, extension):
     path = tmp_path / f"m.{extension}"
     meshio.write(path, meshio.Mesh(triangles.vertices, [("triangle", triangles.faces)]), **(
         {"binary": False} if extension in ("ply", "stl") else {}))
-    if extension == "vtk":  # not a format of dsreg: refused with a clear message
-        with pytest.raises(ValueError, match="supported mesh formats are .obj, .off, .ply and .stl"):
+    if extension == "vtk":  # meshio writes an unstructured grid, not the PolyData of a mesh file: refused clearly
+        with pytest.raises(ValueError, match="the dataset is UNSTRUCTURED_GRID, not POLYDATA"):
             dsreg.read_mesh(path)
         return
     back = dsreg.read_mesh(path)

@@ -54,7 +54,8 @@ def signed_volume(mesh):
 @pytest.mark.parametrize("name", list(AFFINES))
 def test_sphere_in_world_coordinates(tmp_path, name):
     """A ball defined in world coordinates, saved and loaded with nibabel: the mesh of
-    regularize(img.get_fdata(), affine=img.affine) lies on that ball's sphere, faces outward."""
+    regularize(img.get_fdata(), affine=img.affine, affine_space="ras") lies on that ball's sphere,
+    faces outward, in RAS."""
     affine = AFFINES[name]
     shape = (36, 34, 30)
     center = nib.affines.apply_affine(affine, np.array(shape) / 2 - 0.4)
@@ -63,7 +64,8 @@ def test_sphere_in_world_coordinates(tmp_path, name):
     img = nifti_round_trip(tmp_path, mask, affine)
     np.testing.assert_allclose(img.affine, affine, atol=1e-5)  # NIfTI stores it in float32
 
-    mesh = dsreg.regularize(img.get_fdata(), affine=img.affine)
+    mesh = dsreg.regularize(img.get_fdata(), affine=img.affine, affine_space="ras")
+    assert mesh.coordinate_system == "RAS"
     voxel = np.abs(np.linalg.det(affine[:3, :3])) ** (1 / 3)
     distance = np.abs(np.linalg.norm(mesh.vertices - center, axis=1) - radius)
     assert distance.max() < 0.75 * voxel and distance.mean() < 0.2 * voxel, (distance.max(), distance.mean())
@@ -73,14 +75,17 @@ def test_sphere_in_world_coordinates(tmp_path, name):
     outward = np.einsum("ij,ij->i", mesh.face_normals, centroids - center)
     assert np.mean(outward > 0) > 0.99
     np.testing.assert_allclose(np.linalg.norm(mesh.face_normals, axis=1), 1, rtol=1e-9)
+    # The grid holds the placement in LPS, as ITK reads the file.
     direction = np.array(mesh.report["grid"]["direction"])
-    np.testing.assert_allclose(direction @ np.diag(mesh.report["grid"]["spacing"]), img.affine[:3, :3], atol=1e-6)
+    lps_to_ras = np.diag([-1.0, -1.0, 1.0])
+    np.testing.assert_allclose(lps_to_ras @ direction @ np.diag(mesh.report["grid"]["spacing"]), img.affine[:3, :3], atol=1e-6)
 
 
 @pytest.mark.parametrize("name", list(AFFINES))
 def test_affine_moves_the_grid_frame_mesh(tmp_path, name):
     """regularize(..., affine=A) is the mesh of the grid frame (spacing, origin of A) moved by A's
-    directions: world = origin + D (p − origin), faces reversed when D mirrors."""
+    directions: world = origin + D (p − origin), faces reversed (a, b, c, d) → (a, d, c, b) when D
+    mirrors."""
     affine = AFFINES[name]
     spacing = np.linalg.norm(affine[:3, :3], axis=0)
     direction, origin = affine[:3, :3] / spacing, affine[:3, 3]
@@ -90,7 +95,7 @@ def test_affine_moves_the_grid_frame_mesh(tmp_path, name):
     grid = dsreg.regularize(mask, spacing=spacing, origin=origin)
     np.testing.assert_allclose(world.vertices, (grid.vertices - origin) @ direction.T + origin, rtol=0, atol=1e-9)
     mirrored = np.linalg.det(direction) < 0
-    np.testing.assert_array_equal(world.faces, grid.faces[:, ::-1] if mirrored else grid.faces)
+    np.testing.assert_array_equal(world.faces, grid.faces[:, [0, 3, 2, 1]] if mirrored else grid.faces)
     np.testing.assert_allclose(world.face_normals, grid.face_normals @ direction.T, atol=1e-9)
     assert signed_volume(world) > 0 and signed_volume(world) == pytest.approx(signed_volume(grid), rel=1e-9)
 
