@@ -76,12 +76,31 @@ def cases(folder: Path):
     c_order = np.ascontiguousarray(mask)
     yield ("goursat h=0.1, C-order bool array", raw_args + ["--radius", "1.39"],
            lambda: dsreg.regularize(c_order, affine=affine, radius=1.39), raw_args)
+    # A label map in a NIfTI file with an oblique, mirrored affine (labels 1 and 2), as nibabel writes it.
+    import nibabel
+
+    labels = mask.astype(np.int16) * 2
+    labels[: mask.shape[0] // 8] += 1
+    rotation = np.linalg.qr(np.array([[0.9, -0.3, 0.2], [0.3, 0.95, 0.1], [-0.2, 0.0, 0.98]]))[0]
+    oblique = np.eye(4)
+    oblique[:3, :3] = rotation @ np.diag([-0.1, 0.1, 0.1])
+    oblique[:3, 3] = (12.0, -30.0, 5.0)
+    nii = folder / "labels.nii.gz"
+    nibabel.save(nibabel.Nifti1Image(labels, oblique), nii)
+    nii_values, nii_affine = dsreg.read_volume(nii)
+    yield ("goursat h=0.1 label map, oblique .nii.gz: read_volume arrays, --label 2 --space ras",
+           [nii, "--label", "2", "--space", "ras", "--radius", "1.39"],
+           lambda: dsreg.regularize(nii_values, affine=nii_affine, label=2, space="ras", radius=1.39),
+           [nii, "--min", "2", "--max", "2"])
+    yield ("same, file path", [nii, "--label", "2", "--space", "ras", "--radius", "1.39"],
+           lambda: dsreg.regularize(nii, label=2, space="ras", radius=1.39), None)
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--dsreg", default="build-release/dsreg", help="the dsreg command to compare with")
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--only", default="", help="run only the cases whose name contains this text")
     args = parser.parse_args()
     print(f"OMP_WAIT_POLICY={os.environ.get('OMP_WAIT_POLICY', '(unset)')}, {os.cpu_count()} cores", file=sys.stderr)
     print("| case | CLI wall s | Python wall s | wall ratio | CLI CPU s | Python CPU s | CPU ratio | Slicer wall s "
@@ -91,6 +110,8 @@ def main():
         folder = Path(folder)
         out = folder / "out.ply"
         for name, cli_args, job, slicer_args in cases(folder):
+            if args.only not in name:
+                continue
             load = os.getloadavg()[0]
             job()  # warm: page cache, first-touch of the allocator
             cli, python, slicer = [], [], []
