@@ -3,7 +3,10 @@
 // clean closed surfaces.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <numeric>
+#include <random>
 
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/error.hpp"
@@ -120,6 +123,25 @@ TEST(MeshValidity, DigitalCubeAndSphereAreValid) {
     const MeshValidity sphere = check_mesh_validity(on_sphere, surface.quads, outward);
     EXPECT_TRUE(sphere.valid()) << sphere.intersecting_pairs << " pairs, " << sphere.folded_faces << " folded";
     EXPECT_EQ(sphere.faces, surface.face_count());
+}
+
+TEST(SelfIntersections, ClosedSurfaceInAnyTriangleOrderIsClean) {
+    // The triangles are built into CGAL's mesh in the order given; a closed sphere whose
+    // triangles come in random order must still be found clean (no triangle refused and left to
+    // its own copies of the shared vertices).
+    const DigitalSurface surface = extract_digital_surface(test::make_ball(12, 4, 5.5), Connectivity::TwentySix);
+    PointMatrix on_sphere = surface.vertices;
+    for (Eigen::Index i = 0; i < on_sphere.rows(); ++i)
+        on_sphere.row(i) = Eigen::RowVector3d(5.5, 5.5, 5.5) + 4.0 * (on_sphere.row(i) - Eigen::RowVector3d(5.5, 5.5, 5.5)).normalized();
+    const FaceMatrix triangles = mesh_triangles(on_sphere, surface.quads);
+    std::vector<Eigen::Index> order(std::size_t(triangles.rows()));
+    std::iota(order.begin(), order.end(), 0);
+    std::shuffle(order.begin(), order.end(), std::mt19937(3));
+    FaceMatrix shuffled(triangles.rows(), 3);
+    for (std::size_t t = 0; t < order.size(); ++t) shuffled.row(Eigen::Index(t)) = triangles.row(order[t]);
+    const TriangleSelfIntersections found = triangle_self_intersections(on_sphere, shuffled);
+    EXPECT_TRUE(found.pairs.empty()) << found.pairs.size() << " pairs";
+    EXPECT_TRUE(found.degenerate.empty());
 }
 
 TEST(MeshValidity, OverlappingCubesIntersectOnExactlyTheFacesThatCross) {
