@@ -6,11 +6,11 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "cli_text.hpp"
+#include "dsreg/text.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
 #include "dsreg/mesh_io.hpp"
-#include "volume_source.hpp"
+#include "dsreg/pipeline.hpp"
 
 namespace dsreg::cli {
 
