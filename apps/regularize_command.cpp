@@ -28,6 +28,7 @@ struct CliFlags {
     std::string solver = "auto";
     int connectivity = 26;
     bool quiet = false, verbose = false;
+    bool no_repair = false, no_check = false;
 };
 
 struct RegularizeCommand {
@@ -140,6 +141,7 @@ void apply_flags(RegularizeCommand& c) {
     if (!f.spacing.empty()) c.source.spacing = Eigen::Vector3d(f.spacing[0], f.spacing[1], f.spacing[2]);
     c.options.solver = parse_solver_kind(f.solver);
     c.options.connectivity = f.connectivity == 6 ? Connectivity::Six : Connectivity::TwentySix;
+    c.options.validity = f.no_check ? ValidityMode::Off : f.no_repair ? ValidityMode::Check : ValidityMode::Repair;
     NormalFieldOptions& normals = c.options.normals;
     const bool at = normals.kind == "at";
     for (const CLI::Option* option : f.at_only)
@@ -189,6 +191,10 @@ void add_regularize_command(CLI::App& app) {
                     "iterative solvers stop once their error bound is below 5e-5 voxel")
         ->check(CLI::IsMember(solver_names()))
         ->capture_default_str();
+    cmd->add_flag("--no-repair", c->flags.no_repair,
+                  "Keep the mesh as solved: self-intersections and faces folded against u are counted and reported "
+                  "but not repaired (docs/validity.md)");
+    cmd->add_flag("--no-check", c->flags.no_check, "Do not even count them (implies --no-repair)");
     cmd->add_flag("--triangulate", c->outputs.triangulate, "Split each quad along its shorter diagonal");
     cmd->add_option("--input-mesh", c->outputs.input_mesh, "Also write the unregularized digital surface to this file");
     cmd->add_option("--report", c->outputs.report, "Write counts, timings, energies and parameters as JSON");

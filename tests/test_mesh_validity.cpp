@@ -176,6 +176,18 @@ TEST(MeshValidity, EdgeTouchingVoxelsTouchThemselves) {
     EXPECT_FALSE(v.valid());
 }
 
+TEST(MeshValidity, FoldTestLooksAtBothSplitsOfAQuad) {
+    // Quad (0,1,2,3) folded along its longer diagonal 1–3 only: vertex 2 lies on the far side of
+    // the line 1–3, so abd = (0,1,3) faces +z but bcd = (1,2,3) faces −z, while the split along
+    // the shorter diagonal 0–2 gives two triangles facing +z.
+    const PointMatrix p = points({{0, 0, 0}, {2, 0, 0}, {0.7, 0.7, 0}, {0, 2, 0}});
+    const FaceMatrix quad = faces({{0, 1, 2, 3}});
+    const PointMatrix up = points({{0, 0, 1}});
+    ASSERT_TRUE(triangle_self_intersections(p, mesh_triangles(p, quad)).pairs.empty());
+    ASSERT_EQ(mesh_triangles(p, quad), faces({{0, 1, 2}, {0, 2, 3}}));  // the shorter diagonal, 0–2
+    EXPECT_EQ(faces_folded_against_field(p, quad, up), (std::vector<std::int32_t>{0}));
+}
+
 TEST(MeshValidity, FoldTestLooksAtEachTriangleOfTheSplit) {
     // Quad (0,1,2,3), shorter diagonal 0–2: triangle (0,1,2) faces +z, vertex 3 is pulled across
     // the diagonal so that (0,2,3) faces (0.5,−0.5,−0.6). Their mean normal still has a positive

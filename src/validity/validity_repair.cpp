@@ -455,7 +455,7 @@ ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointM
     report.energy_before = regularization_energy(positions, surface.vertices, surface.quads, links, normals, weights);
     report.energy_after = report.energy_before;
     report.check_seconds = report.before.seconds;
-    if (report.before.valid()) return result;
+    if (report.before.valid() || options.max_rounds == 0) return result;
 
     // Rounds on windows around what is invalid, then one exact solve of the whole region; again
     // if that solve undid the repair somewhere.
