@@ -60,9 +60,9 @@ struct ValidityRepairOptions {
     double alpha_step = 10;    ///< then × this each round it is still invalid (> 1)
     double alpha_cap = 1000;   ///< a vertex whose factor reached this and is still invalid is held
     double alpha_grade = 3;    ///< the rings around a strengthened vertex get its factor / this per ring
-    int grade_rings = 3;       ///< rings graded so
-    int region_rings = 4;      ///< the region U: the strengthened vertices and this many rings (≥ grade_rings)
-    int window_rings = 6;      ///< each round re-solves the region within this many rings of them
+    int grade_rings = 2;       ///< rings graded so
+    int region_rings = 2;      ///< the region U: the strengthened vertices and this many rings (≥ grade_rings)
+    int window_rings = 4;      ///< each round re-solves the region within this many rings of them
     double split_offset = 0.1;  ///< voxels: the targets of the copies of a split pointel move apart
     double field_margin = 0.2;  ///< corrected faces get u·n_s = this (about 78° from n_s at most)
     int max_rounds = 40;
