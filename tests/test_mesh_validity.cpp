@@ -2,6 +2,7 @@
 // whose answer is known exactly, the meaning of "shares an edge / a vertex", the fold test, and
 // clean closed surfaces.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -142,6 +143,29 @@ TEST(SelfIntersections, ClosedSurfaceInAnyTriangleOrderIsClean) {
     const TriangleSelfIntersections found = triangle_self_intersections(on_sphere, shuffled);
     EXPECT_TRUE(found.pairs.empty()) << found.pairs.size() << " pairs";
     EXPECT_TRUE(found.degenerate.empty());
+}
+
+TEST(SelfIntersections, SplittingTheWorkOverThreadsFindsTheSamePairs) {
+    // Two spheres of radius 24 (about 30000 triangles each), the second moved by 5 along x: large
+    // enough for the test to be split in slabs, one per thread.
+    const DigitalSurface surface = extract_digital_surface(test::make_ball(52, 24, 25.5), Connectivity::TwentySix);
+    const Eigen::RowVector3d centre(25.5, 25.5, 25.5);
+    PointMatrix sphere = surface.vertices;
+    for (Eigen::Index i = 0; i < sphere.rows(); ++i) sphere.row(i) = centre + 24.0 * (sphere.row(i) - centre).normalized();
+    PointMatrix both(2 * sphere.rows(), 3);
+    both << sphere, (sphere.rowwise() + Eigen::RowVector3d(5, 0, 0));
+    FaceMatrix quads(2 * surface.face_count(), 4);
+    quads << surface.quads, (surface.quads.array() + std::int32_t(sphere.rows())).matrix();
+    const FaceMatrix triangles = mesh_triangles(both, quads);
+    const int threads = omp_get_max_threads();
+    omp_set_num_threads(1);
+    const TriangleSelfIntersections one = triangle_self_intersections(both, triangles);
+    omp_set_num_threads(std::max(threads, 2));
+    const TriangleSelfIntersections two = triangle_self_intersections(both, triangles);
+    omp_set_num_threads(threads);
+    EXPECT_GT(one.pairs.size(), 100u);
+    EXPECT_EQ(one.pairs, two.pairs);
+    EXPECT_EQ(one.degenerate, two.degenerate);
 }
 
 TEST(MeshValidity, OverlappingCubesIntersectOnExactlyTheFacesThatCross) {
