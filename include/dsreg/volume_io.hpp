@@ -46,6 +46,7 @@ struct RawVolumeLayout {
 /// Limits that protect the machine from absurd headers.
 struct VolumeLimits {
     std::int64_t max_voxels = std::int64_t(1) << 34;  ///< 16 Gi voxels
+    std::int64_t max_labels = std::int64_t(1) << 20;  ///< distinct labels of a label map (read_label_volume)
 };
 
 /// Parse a RawVoxelType from its CLI name: uint8 int8 uint16 int16 uint32 int32 uint64 int64
@@ -81,6 +82,13 @@ BinaryVolume read_volume(const std::string& path, const ValueRange& range = {}, 
 /// same checks, same errors), without thresholding. PGM values are checked against maxval.
 ScalarVolume read_volume_values(const std::string& path, const RawVolumeLayout* raw_layout = nullptr,
                                 const VolumeLimits& limits = {});
+
+/// A label map (any format read_volume accepts, same checks and errors): every distinct value
+/// is a label, 0 the background. Values must be integers (below 2^53 in magnitude) and there may
+/// be at most limits.max_labels distinct ones; otherwise dsreg::Error names the file and the
+/// voxel. 4 bytes per voxel (label indices, volume.hpp).
+LabelVolume read_label_volume(const std::string& path, const RawVolumeLayout* raw_layout = nullptr,
+                              const VolumeLimits& limits = {});
 
 /// Writers (atomic: a temporary file renamed into place). `values` holds one value per voxel of
 /// `dims`, x fastest. Used by tests, fuzz seeds and users converting volumes. They throw

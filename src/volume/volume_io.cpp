@@ -5,10 +5,12 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <limits>
 #include <new>
+#include <numeric>
 #include <sstream>
 #include <utility>
 
@@ -115,28 +117,38 @@ std::int64_t checked_voxel_count(const std::string& path, const Index3& dims, co
 // ----------------------------------------------------------------------------------------------
 // VoxelDestination
 
-VoxelDestination VoxelDestination::mask(const ValueRange& range) { return VoxelDestination(false, range); }
+VoxelDestination VoxelDestination::mask(const ValueRange& range) { return VoxelDestination(Kind::Mask, range); }
 
-VoxelDestination VoxelDestination::values() { return VoxelDestination(true, ValueRange{}); }
+VoxelDestination VoxelDestination::values() { return VoxelDestination(Kind::Values, ValueRange{}); }
+
+VoxelDestination VoxelDestination::labels(std::int64_t max_labels) {
+    return VoxelDestination(Kind::Labels, ValueRange{}, max_labels);
+}
 
 void VoxelDestination::allocate(const std::string& path, const Index3& dims) {
     grid_ = VoxelGrid{};
     grid_.dims = dims;
     const auto count = static_cast<std::size_t>(grid_.voxel_count());
+    const int bytes_per_voxel = kind_ == Kind::Mask ? 1 : 4;
     try {
-        if (keep_values_)
+        if (kind_ == Kind::Values)
             values_.assign(count, 0.0f);
+        else if (kind_ == Kind::Labels)
+            labels_.assign(count, 0u);
         else
             mask_.assign(count, 0);
     } catch (const std::bad_alloc&) {
-        const std::string bytes = std::to_string(grid_.voxel_count() * (keep_values_ ? 4 : 1));
-        fail(path, "not enough memory for a " + format_dims(dims) + (keep_values_ ? " volume of values (" : " mask (") + bytes +
-                       " bytes)");
+        const char* what = kind_ == Kind::Values ? " volume of values (" : kind_ == Kind::Labels ? " label map (" : " mask (";
+        fail(path, "not enough memory for a " + format_dims(dims) + what +
+                       std::to_string(grid_.voxel_count() * bytes_per_voxel) + " bytes)");
     }
+    if (kind_ == Kind::Labels) label_table_ = std::make_unique<LabelTable>(path, max_labels_);
 }
 
 SampleWriter VoxelDestination::writer(const std::string& path, SampleFormat format) {
-    return keep_values_ ? SampleWriter(path, format, values_) : SampleWriter(path, format, range_, mask_);
+    if (kind_ == Kind::Values) return SampleWriter(path, format, values_);
+    if (kind_ == Kind::Labels) return SampleWriter(path, format, labels_, *label_table_);
+    return SampleWriter(path, format, range_, mask_);
 }
 
 BinaryVolume VoxelDestination::take_mask() {
@@ -151,6 +163,58 @@ ScalarVolume VoxelDestination::take_values() {
     volume.grid = grid_;
     volume.values = std::move(values_);
     return volume;
+}
+
+LabelVolume VoxelDestination::take_labels() {
+    LabelVolume volume;
+    volume.grid = grid_;
+    volume.values = label_table_->finish(labels_);
+    volume.labels = std::move(labels_);
+    return volume;
+}
+
+// ----------------------------------------------------------------------------------------------
+// LabelTable
+
+LabelTable::LabelTable(const std::string& path, std::int64_t max_labels) : path_(path), max_labels_(max_labels) {
+    values_.push_back(0);
+    index_.emplace(0, 0u);
+}
+
+std::uint32_t LabelTable::look_up(double value, std::uint64_t voxel) {
+    // Integers of magnitude below 2^53 are exact in a double; anything else is not a label.
+    if (!(std::abs(value) < 9007199254740992.0) || value != std::floor(value))
+        fail(path_, "value " + format_value(value) + " of voxel #" + std::to_string(voxel) +
+                        " is not an integer: a label map holds integer labels");
+    const auto key = static_cast<std::int64_t>(value);
+    auto it = index_.find(key);
+    if (it == index_.end()) {
+        if (static_cast<std::int64_t>(values_.size()) > max_labels_)
+            fail(path_, "more than " + std::to_string(max_labels_) + " distinct labels (voxel #" + std::to_string(voxel) +
+                            " has one more): not a label map?");
+        it = index_.emplace(key, static_cast<std::uint32_t>(values_.size())).first;
+        values_.push_back(key);
+    }
+    last_value_ = value;
+    last_index_ = it->second;
+    return last_index_;
+}
+
+std::vector<std::int64_t> LabelTable::finish(std::vector<std::uint32_t>& labels) const {
+    // Index order: the background, then the other values increasing.
+    std::vector<std::uint32_t> order(values_.size());
+    std::iota(order.begin(), order.end(), 0u);
+    std::sort(order.begin() + 1, order.end(), [&](std::uint32_t a, std::uint32_t b) { return values_[a] < values_[b]; });
+    std::vector<std::uint32_t> renumbered(values_.size());
+    std::vector<std::int64_t> sorted(values_.size());
+    for (std::size_t rank = 0; rank < order.size(); ++rank) {
+        renumbered[order[rank]] = static_cast<std::uint32_t>(rank);
+        sorted[rank] = values_[order[rank]];
+    }
+#pragma omp parallel for schedule(static)
+    for (std::int64_t v = 0; v < static_cast<std::int64_t>(labels.size()); ++v)
+        labels[std::size_t(v)] = renumbered[labels[std::size_t(v)]];
+    return sorted;
 }
 
 // ----------------------------------------------------------------------------------------------
@@ -225,6 +289,13 @@ SampleWriter::SampleWriter(const std::string& path, SampleFormat format, std::ve
     values_ = values.data();
 }
 
+SampleWriter::SampleWriter(const std::string& path, SampleFormat format, std::vector<std::uint32_t>& labels,
+                           LabelTable& table)
+    : SampleWriter(path, format, labels.size()) {
+    labels_ = labels.data();
+    label_table_ = &table;
+}
+
 void SampleWriter::reject_values_above(double max_value, const std::string& limit_name) {
     has_max_ = true;
     max_value_ = max_value;
@@ -241,10 +312,14 @@ void SampleWriter::emit(const std::uint8_t* sample) {
     if (has_max_ && value > max_value_)
         fail(path_, "value " + format_value(value) + " of voxel #" + std::to_string(written_) + " exceeds " + max_name_ + " " +
                         format_value(max_value_));
-    if (mask_ != nullptr)
+    if (mask_ != nullptr) {
         mask_[written_++] = range_.contains(value) ? 1 : 0;
-    else
+    } else if (labels_ != nullptr) {
+        labels_[written_] = label_table_->index_of(value, written_);
+        ++written_;
+    } else {
         values_[written_++] = static_cast<float>(value);
+    }
 }
 
 void SampleWriter::consume(const std::uint8_t* data, std::size_t count) {
@@ -347,6 +422,12 @@ ScalarVolume read_volume_values(const std::string& path, const RawVolumeLayout* 
     auto destination = volume_io_detail::VoxelDestination::values();
     volume_io_detail::read_volume_voxels(path, raw_layout, limits, destination);
     return destination.take_values();
+}
+
+LabelVolume read_label_volume(const std::string& path, const RawVolumeLayout* raw_layout, const VolumeLimits& limits) {
+    auto destination = volume_io_detail::VoxelDestination::labels(limits.max_labels);
+    volume_io_detail::read_volume_voxels(path, raw_layout, limits, destination);
+    return destination.take_labels();
 }
 
 }  // namespace dsreg

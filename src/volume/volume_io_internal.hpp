@@ -16,7 +16,9 @@
 #include <cstdint>
 #include <fstream>
 #include <ostream>
+#include <memory>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <zlib.h>
@@ -77,8 +79,36 @@ struct SampleFormat {
     bool big_endian = false;
 };
 
+/// Label indices of the integer values of a label map, assigned as the values are decoded
+/// (index 0 is the value 0, the background), then renumbered in increasing order of value.
+/// The number of distinct labels is capped (VolumeLimits::max_labels) so that a hostile file of
+/// distinct values cannot make the table grow without bound.
+class LabelTable {
+public:
+    LabelTable(const std::string& path, std::int64_t max_labels);
+    /// The index of `value` (the value of voxel #voxel). Throws, naming the file and the voxel,
+    /// for a value that is not an integer of magnitude below 2^53, or one label too many.
+    std::uint32_t index_of(double value, std::uint64_t voxel) {
+        if (value == last_value_) return last_index_;
+        return look_up(value, voxel);
+    }
+    /// Renumbers `labels` so that indices increase with the value (background first) and
+    /// returns the value of each index.
+    std::vector<std::int64_t> finish(std::vector<std::uint32_t>& labels) const;
+
+private:
+    std::uint32_t look_up(double value, std::uint64_t voxel);
+
+    std::string path_;
+    std::int64_t max_labels_;
+    std::unordered_map<std::int64_t, std::uint32_t> index_;
+    std::vector<std::int64_t> values_;  ///< by index of first appearance
+    double last_value_ = 0;
+    std::uint32_t last_index_ = 0;
+};
+
 /// Decodes a stream of encoded samples, in voxel order, into either mask bytes (1 = value in
-/// `range`) or float values. Bytes may arrive in chunks of any size: a sample split between
+/// `range`), float values, or label indices. Bytes may arrive in chunks of any size: a sample split between
 /// chunks is completed by the next call. Optionally rejects values above a maximum (PGM's
 /// maxval). The destination vector must already have one element per voxel.
 class SampleWriter {
@@ -87,6 +117,8 @@ public:
     SampleWriter(const std::string& path, SampleFormat format, const ValueRange& range, std::vector<std::uint8_t>& mask);
     /// Values: values[i] = value of voxel i, rounded to float.
     SampleWriter(const std::string& path, SampleFormat format, std::vector<float>& values);
+    /// Labels: labels[i] = table.index_of(value of voxel i).
+    SampleWriter(const std::string& path, SampleFormat format, std::vector<std::uint32_t>& labels, LabelTable& table);
 
     /// Values above `max_value` make consume() throw (naming the file and the voxel).
     void reject_values_above(double max_value, const std::string& limit_name);
@@ -103,8 +135,10 @@ private:
     std::string path_;
     SampleFormat format_;
     ValueRange range_;
-    std::uint8_t* mask_ = nullptr;  ///< exactly one of mask_ / values_ is set
+    std::uint8_t* mask_ = nullptr;  ///< exactly one of mask_ / values_ / labels_ is set
     float* values_ = nullptr;
+    std::uint32_t* labels_ = nullptr;
+    LabelTable* label_table_ = nullptr;
     std::uint64_t size_ = 0;
     bool use_byte_table_ = false;
     double byte_table_[256] = {};        ///< decoded value of each byte, for 1-byte samples
@@ -120,13 +154,15 @@ private:
 /// The name the thresholding decoder had before it could also keep values.
 using MaskWriter = SampleWriter;
 
-/// What a reader produces: a mask thresholded by a ValueRange (read_volume) or the values
-/// themselves as floats (read_volume_values). Readers call allocate() once the header is
-/// checked, then feed it through writer() (binary payloads) or set() (ASCII payloads).
+/// What a reader produces: a mask thresholded by a ValueRange (read_volume), the values
+/// themselves as floats (read_volume_values) or label indices (read_label_volume). Readers call
+/// allocate() once the header is checked, then feed it through writer() (binary payloads) or
+/// set() (ASCII payloads).
 class VoxelDestination {
 public:
     static VoxelDestination mask(const ValueRange& range);
     static VoxelDestination values();
+    static VoxelDestination labels(std::int64_t max_labels);
 
     /// Storage for `dims` voxels (spacing 1, origin 0). Throws dsreg::Error naming `path` if
     /// the memory cannot be allocated.
@@ -134,8 +170,10 @@ public:
     std::uint64_t size() const { return static_cast<std::uint64_t>(grid_.voxel_count()); }
     /// Stores the value of voxel `index` (thresholded or rounded to float).
     void set(std::uint64_t index, double value) {
-        if (keep_values_)
+        if (kind_ == Kind::Values)
             values_[index] = static_cast<float>(value);
+        else if (kind_ == Kind::Labels)
+            labels_[index] = label_table_->index_of(value, index);
         else
             mask_[index] = range_.contains(value) ? 1 : 0;
     }
@@ -144,15 +182,21 @@ public:
 
     BinaryVolume take_mask();
     ScalarVolume take_values();
+    LabelVolume take_labels();
 
 private:
-    VoxelDestination(bool keep_values, const ValueRange& range) : keep_values_(keep_values), range_(range) {}
+    enum class Kind { Mask, Values, Labels };
+    VoxelDestination(Kind kind, const ValueRange& range, std::int64_t max_labels = 0)
+        : kind_(kind), range_(range), max_labels_(max_labels) {}
 
-    bool keep_values_;
+    Kind kind_;
     ValueRange range_;
+    std::int64_t max_labels_;
     VoxelGrid grid_;
     std::vector<std::uint8_t> mask_;
     std::vector<float> values_;
+    std::vector<std::uint32_t> labels_;
+    std::unique_ptr<LabelTable> label_table_;  ///< created by allocate() (it names the file)
 };
 
 // The format readers, each decoding one file into a destination (vol_format.cpp,
