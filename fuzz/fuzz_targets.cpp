@@ -247,6 +247,8 @@ void check_mesh(const char* target, const PolygonMesh& mesh) {
     FUZZ_CHECK(target, mesh.face_normals.rows() == 0 || mesh.face_normals.rows() == mesh.faces.rows(), "face normal count");
     for (const auto& [name, values] : mesh.vertex_scalars)
         FUZZ_CHECK(target, values.size() == n, "vertex scalar '" + name + "' has the wrong size");
+    for (const auto& [name, values] : mesh.face_integers)
+        FUZZ_CHECK(target, values.size() == mesh.faces.rows(), "face integer '" + name + "' has the wrong size");
 }
 
 Outcome mesh_target(const char* target, const std::uint8_t* data, std::size_t size) {
@@ -282,6 +284,7 @@ Outcome mesh_target(const char* target, const std::uint8_t* data, std::size_t si
         FUZZ_CHECK(target, again.vertices == mesh.vertices, "round trip changed the vertices");
         FUZZ_CHECK(target, again.faces == mesh.faces, "round trip changed the faces");
     }
+    if (extension == "ply") FUZZ_CHECK(target, again.face_integers == mesh.face_integers, "round trip changed the face integers");
     return outcome;
 }
 

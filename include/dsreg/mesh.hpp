@@ -25,6 +25,10 @@ struct PolygonMesh {
     FaceMatrix faces;
     PointMatrix face_normals;  ///< empty, or one unit vector per face (e.g. the input field u)
     std::vector<std::pair<std::string, Eigen::VectorXd>> vertex_scalars;  ///< named per-vertex values
+    /// Named per-face integers, e.g. the labels on either side of each face of a label complex.
+    /// Added last, with a default member initializer, so that aggregate initialization
+    /// {vertices, faces, normals, scalars} stays valid and warning-free.
+    std::vector<std::pair<std::string, Eigen::VectorXi>> face_integers{};
 };
 
 }  // namespace dsreg

@@ -1,4 +1,5 @@
-// Convolved trivial normals (see normals.hpp): surfel centres are binned into cubic cells of
+// Convolved trivial normals (see normals.hpp), over the faces of one interface on a label
+// complex: surfel centres are binned into cubic cells of
 // side ≥ r, so every neighbour within r of a surfel lies in the 3×3×3 block of cells around
 // its own. Cost: O(m log m) for the binning, then O(r²/h²) per surfel on a surface.
 #include <algorithm>
@@ -60,29 +61,42 @@ std::vector<std::int64_t> neighbour_cells(const CellBins& bins, std::int64_t c) 
 
 }  // namespace
 
-PointMatrix convolved_trivial_normals(const DigitalSurface& surface, double radius) {
+namespace {
+
+bool same_interface(const DigitalSurface& surface, std::int64_t f, std::int64_t g) {
+    if (surface.face_labels.empty()) return true;  // a binary surface: one interface
+    const FaceLabels& a = surface.face_labels[std::size_t(f)];
+    const FaceLabels& b = surface.face_labels[std::size_t(g)];
+    return a.inner == b.inner && a.outer == b.outer;
+}
+
+/// Convolved trivial normals of the faces f with wanted(f) (all if `wanted` is empty), written
+/// into u; the other rows of u are left alone.
+void convolve_trivial_normals(const DigitalSurface& surface, double radius, IntegralInvariantKernel kernel,
+                              const std::vector<char>& wanted, PointMatrix& u) {
     if (!(radius > 0) || !std::isfinite(radius))
         throw Error("convolved trivial normals: radius must be positive and finite (got " + std::to_string(radius) + ")");
-    const std::int64_t m = surface.face_count();
     const PointMatrix centres = surfel_centers(surface);
     // Distinct surfel centres are at least half a voxel apart, so cells need not be much smaller
     // than a voxel even for a tiny radius (which keeps the cell coordinates small).
     const double cell_size = std::max(radius, 0.25 * surface.grid.spacing.minCoeff());
     const CellBins bins = bin_centres(centres, cell_size);
     const double r2 = radius * radius;
-    PointMatrix u(m, 3);
 #pragma omp parallel for schedule(dynamic, 16)
     for (std::int64_t c = 0; c < std::int64_t(bins.cells.size()); ++c) {
         const std::vector<std::int64_t> around = neighbour_cells(bins, c);
         for (std::int64_t q = bins.first[std::size_t(c)]; q < bins.first[std::size_t(c) + 1]; ++q) {
             const std::int32_t f = bins.order[std::size_t(q)];
+            if (!wanted.empty() && !wanted[std::size_t(f)]) continue;
             Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
             for (std::int64_t n : around)
                 for (std::int64_t p = bins.first[std::size_t(n)]; p < bins.first[std::size_t(n) + 1]; ++p) {
                     const std::int32_t g = bins.order[std::size_t(p)];
-                    if ((centres.row(g) - centres.row(f)).squaredNorm() > r2) continue;
+                    const double d2 = (centres.row(g) - centres.row(f)).squaredNorm();
+                    if (d2 > r2 || !same_interface(surface, f, g)) continue;
                     const Surfel& s = surface.surfels[std::size_t(g)];
-                    sum[s.axis] += s.sign;
+                    const double q2 = 1.0 - d2 / r2;
+                    sum[s.axis] += kernel == IntegralInvariantKernel::ball ? s.sign : s.sign * q2 * q2;
                 }
             const double norm = sum.norm();
             // Opposite sides of a plate thinner than 2r can cancel out: keep the surfel's own normal.
@@ -90,7 +104,29 @@ PointMatrix convolved_trivial_normals(const DigitalSurface& surface, double radi
                                    : Eigen::RowVector3d(surface.surfels[std::size_t(f)].trivial_normal().transpose());
         }
     }
+}
+
+}  // namespace
+
+PointMatrix convolved_trivial_normals(const DigitalSurface& surface, double radius, IntegralInvariantKernel kernel) {
+    PointMatrix u(surface.face_count(), 3);
+    convolve_trivial_normals(surface, radius, kernel, {}, u);
     return u;
+}
+
+PointMatrix convolved_trivial_normals(const DigitalSurface& surface, double radius) {
+    return convolved_trivial_normals(surface, radius, IntegralInvariantKernel::ball);
+}
+
+std::int64_t use_interface_normals_near_junctions(const LabelVolume& volume, const DigitalSurface& surface, double radius,
+                                                  PointMatrix& normals) {
+    if (normals.rows() != surface.face_count())
+        throw Error("interface normals: " + std::to_string(normals.rows()) + " normals for " +
+                    std::to_string(surface.face_count()) + " faces");
+    const std::vector<char> near = faces_near_junctions(volume, surface, radius);
+    const std::int64_t count = std::count(near.begin(), near.end(), char(1));
+    if (count > 0) convolve_trivial_normals(surface, radius, IntegralInvariantKernel::biweight, near, normals);
+    return count;
 }
 
 }  // namespace dsreg
