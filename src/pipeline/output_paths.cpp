@@ -1,4 +1,4 @@
-#include "output_paths.hpp"
+#include "dsreg/output_paths.hpp"
 
 #include <filesystem>
 
@@ -17,6 +17,13 @@ void check_mesh_output_path(const std::string& option, const std::string& path) 
     const std::string ext = file_extension(path);
     if (ext != "obj" && ext != "off" && ext != "ply" && ext != "stl")
         throw Error(option + " " + path + ": unsupported mesh format '" + ext + "' (use .obj .off .ply or .stl)");
+    check_output_folder(option, path);
+}
+
+void check_page_output_path(const std::string& option, const std::string& path) {
+    const std::string ext = file_extension(path);
+    if (ext != "html" && ext != "htm")
+        throw Error(option + " " + path + ": the page must be an .html file (got '" + ext + "')");
     check_output_folder(option, path);
 }
 

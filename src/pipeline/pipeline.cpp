@@ -13,7 +13,7 @@
 #include "dsreg/mesh_io.hpp"
 #include "dsreg/normals_file.hpp"
 #include "dsreg/text.hpp"
-#include "output_paths.hpp"
+#include "dsreg/output_paths.hpp"
 #include "pipeline_stages.hpp"
 #include "stage_clock.hpp"
 
@@ -133,7 +133,8 @@ std::vector<std::pair<std::string, std::string>> all_outputs(const PipelineResul
                                                                 {"--input-mesh", o.input_mesh},
                                                                 {"--report", o.report},
                                                                 {"--export-normals", o.normals},
-                                                                {"--features", o.features}};
+                                                                {"--features", o.features},
+                                                                {"--html", o.html}};
     for (const LabelMesh& mesh : result.label_meshes) {
         const std::int64_t value = result.surface.label_values[mesh.label];
         outputs.emplace_back("the surface of label " + std::to_string(value), label_output_path(o.mesh, value));
@@ -156,20 +157,16 @@ nlohmann::json label_json(const LabelMeasures& m, const std::string& path) {
             {"mesh", path}};
 }
 
-double total_seconds(const PipelineResult& result) {
-    return std::accumulate(result.stage_seconds.begin(), result.stage_seconds.end(), 0.0,
-                           [](double sum, const auto& stage) { return sum + stage.second; });
-}
-
-nlohmann::json energy_json(const EnergyTerms& e, const RegularizationWeights& w) {
-    return {{"data", e.data}, {"alignment", e.alignment}, {"fairness", e.fairness}, {"total", e.total(w)}};
-}
-
 nlohmann::json optional_json(const std::optional<double>& value) {
     return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
 }
 
 }  // namespace
+
+double total_seconds(const PipelineResult& result) {
+    return std::accumulate(result.stage_seconds.begin(), result.stage_seconds.end(), 0.0,
+                           [](double sum, const auto& stage) { return sum + stage.second; });
+}
 
 void check_pipeline_options(const PipelineOptions& o, bool input_is_shape) {
     check_normal_field_options(o.normals, input_is_shape);
@@ -246,6 +243,7 @@ void check_pipeline_outputs(const PipelineOutputs& o) {
     check_mesh_output_path("-o", o.mesh);
     if (!o.input_mesh.empty()) check_mesh_output_path("--input-mesh", o.input_mesh);
     if (!o.report.empty()) check_output_folder("--report", o.report);
+    if (!o.html.empty()) check_page_output_path("--html", o.html);
     if (!o.normals.empty()) check_output_folder("--export-normals", o.normals);
     if (!o.features.empty()) {
         if (file_extension(o.features) != "obj")
@@ -256,7 +254,8 @@ void check_pipeline_outputs(const PipelineOutputs& o) {
                             {"--input-mesh", o.input_mesh},
                             {"--report", o.report},
                             {"--export-normals", o.normals},
-                            {"--features", o.features}});
+                            {"--features", o.features},
+                            {"--html", o.html}});
 }
 
 void write_pipeline_outputs(PipelineResult& result, const PipelineOptions& options, const PipelineOutputs& outputs,
@@ -278,6 +277,7 @@ void write_pipeline_outputs(PipelineResult& result, const PipelineOptions& optio
         written += " and " + label_text(result.label_meshes.size()) + " (" +
                    label_output_path(outputs.mesh, result.surface.label_values[result.label_meshes.front().label]) +
                    (result.label_meshes.size() > 1 ? ", ...)" : ")");
+    if (!outputs.html.empty()) write_html_view(outputs.html, result_page(result, options));
     clock.finish(written);
     result.stage_seconds.push_back(clock.stage_seconds().back());
     if (outputs.report.empty()) return;
@@ -332,7 +332,7 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
     report["total_seconds"] = total_seconds(r);
     report["peak_memory_bytes"] = peak_memory_bytes();
     report["outputs"] = {{"mesh", outputs.mesh}, {"input_mesh", outputs.input_mesh},
-                         {"normals", outputs.normals}, {"features", outputs.features}};
+                         {"normals", outputs.normals}, {"features", outputs.features}, {"html", outputs.html}};
     if (!r.label_meshes.empty()) {
         nlohmann::json labels = nlohmann::json::array();
         for (const LabelMeasures& m : r.label_measures) labels.push_back(label_json(m, label_output_path(outputs.mesh, m.value)));

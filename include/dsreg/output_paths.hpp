@@ -1,4 +1,5 @@
-// dsreg pipeline — checks on output paths, made before any long computation.
+// dsreg — checks on output paths, made before any long computation (folders exist, formats are
+// known, no two outputs on one file).
 #pragma once
 
 #include <string>
@@ -10,6 +11,10 @@ namespace dsreg {
 /// Throws dsreg::Error naming `option` if `path` has no supported mesh extension or its folder
 /// does not exist.
 void check_mesh_output_path(const std::string& option, const std::string& path);
+
+/// Throws dsreg::Error naming `option` if `path` does not end in .html or .htm or its folder
+/// does not exist.
+void check_page_output_path(const std::string& option, const std::string& path);
 
 /// Throws dsreg::Error naming `option` if the folder of `path` does not exist.
 void check_output_folder(const std::string& option, const std::string& path);
