@@ -87,7 +87,7 @@ std::int64_t euler_characteristic(const PolygonMesh& mesh) {
 TEST(LabelPipeline, BinaryInputGivesTodaysResult) {
     VolumeSource source;
     source.shape = "goursat";
-    source.h = 0.5;
+    source.h = 0.75;
     const PipelineOptions options = cholmod_options();
     const PipelineResult binary = run_pipeline(source, options);
     source.multi_label = true;
@@ -230,6 +230,30 @@ TEST(LabelPipeline, InterfaceNormalsNearJunctionsBeatTheIndicatorsIntegralInvari
         EXPECT_LT(chosen.interfaces.mean, 0.5 * indicator.interfaces.mean);
         EXPECT_LT(chosen.interfaces.p95, 0.5 * indicator.interfaces.p95);
     }
+}
+
+TEST(LabelPipeline, JunctionFairnessKeepsJunctionsWhereLabelsMeet) {
+    // Averaging a junction vertex with its neighbours in three sheets drags the junction curve
+    // into the sheets; the fairness along the curve does not. The difference shows once the
+    // fairness weighs (γ = 1).
+    const double h = 0.5;
+    const LabelShape shape = make_label_shape("sectors");
+    PipelineOptions options = cholmod_options();
+    options.gamma = 1.0;
+    const PipelineResult result = run_shape("sectors", h, options);
+    const DigitalSurface& surface = result.surface;
+    RegularizationWeights weights;
+    weights.gamma = 1.0;
+    const RegularizationSystem system = assemble_regularization_system(
+        surface.vertices, surface.quads, vertex_links(surface.quads, surface.vertex_count()), result.field.normals, weights);
+    Eigen::VectorXd x = flatten_points(surface.vertices);
+    SolverOptions solver;
+    solver.kind = SolverKind::Cholmod;
+    solve_spd(system.matrix, system.rhs, x, solver);
+    const auto along_curves = label_complex_errors(shape, surface, result.regularization.positions);
+    const auto quad_links = label_complex_errors(shape, surface, unflatten_points(x));
+    EXPECT_LT(along_curves.interfaces.mean, 0.6 * quad_links.interfaces.mean);
+    EXPECT_LT(along_curves.junctions.mean, quad_links.junctions.mean);
 }
 
 TEST(LabelPipeline, SmallCasesRunAndCloseEveryLabel) {
