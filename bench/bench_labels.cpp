@@ -12,7 +12,8 @@
 //       A label map of N random blobs packed in a ball of radius R voxels (blob_values below),
 //       written as a uint16 .raw file, then one run of the pipeline on it (read included) with
 //       --multi-label; with --binary, the same blobs eroded where they touch, as one binary
-//       object (value > 0): about as many faces, no shared interface. Prints one JSON line: counts, per-stage seconds, CPU
+//       object (value > 0): about as many faces, no shared interface. With --ball-faces F, one
+//       binary ball of about F faces in the same grid instead (ball_values below). Prints one JSON line: counts, per-stage seconds, CPU
 //       seconds, peak memory. With --out, also writes the meshes there (-o DIR/blobs.ply); with
 //       --input-file PATH, keeps the generated volume there (X·Y·Z uint16, for slicer_pipeline.py).
 #include <sys/resource.h>
@@ -160,6 +161,7 @@ int accuracy(const std::vector<double>& steps) {
 // ---- blobs -----------------------------------------------------------------------------------
 
 struct BlobOptions {
+    std::int64_t ball_faces = 0;  ///< > 0: instead of blobs, one binary ball (or shell) of about these faces
     int labels = 100;
     Index3 dims{256, 256, 256};
     double radius = 100;  ///< the total interface area is about that of one ball of this radius
@@ -224,6 +226,26 @@ std::vector<std::uint16_t> blob_values(const BlobOptions& o) {
     return eroded;
 }
 
+/// One binary object of about `faces` faces in the grid: a ball of radius sqrt(faces/6π) (a digital
+/// sphere has about 1.5 faces per unit of area), or, if that does not fit, the largest ball that
+/// does with a concentric cavity for the remaining faces.
+std::vector<std::uint16_t> ball_values(const BlobOptions& o) {
+    const std::int64_t nx = o.dims[0], ny = o.dims[1], nz = o.dims[2];
+    const Eigen::Vector3d centre(0.5 * double(nx - 1), 0.5 * double(ny - 1), 0.5 * double(nz - 1));
+    const double per_area = 6.0 * M_PI;
+    const double outer = std::min(0.48 * double(std::min({nx, ny, nz})), std::sqrt(double(o.ball_faces) / per_area));
+    const double rest = double(o.ball_faces) - per_area * outer * outer;
+    const double inner = rest > 0 ? std::min(outer - 3.0, std::sqrt(rest / per_area)) : -1.0;
+    std::vector<std::uint16_t> values(std::size_t(nx * ny * nz), 0);
+    for (std::int64_t k = 0; k < nz; ++k)
+        for (std::int64_t j = 0; j < ny; ++j)
+            for (std::int64_t i = 0; i < nx; ++i) {
+                const double r = (Eigen::Vector3d{double(i), double(j), double(k)} - centre).norm();
+                values[std::size_t(i + nx * (j + ny * k))] = r <= outer && r > inner ? 1 : 0;
+            }
+    return values;
+}
+
 Index3 parse_dims(const std::string& text) {
     Index3 dims{};
     if (std::sscanf(text.c_str(), "%ld,%ld,%ld", &dims[0], &dims[1], &dims[2]) != 3) throw Error("--dims X,Y,Z");
@@ -235,7 +257,7 @@ int blobs(const BlobOptions& o) {
     std::filesystem::create_directories(folder);
     const std::string input = o.input_file.empty() ? (folder / "blobs.raw").string() : o.input_file;
     {
-        const std::vector<std::uint16_t> values = blob_values(o);
+        const std::vector<std::uint16_t> values = o.ball_faces > 0 ? ball_values(o) : blob_values(o);
         std::ofstream(input, std::ios::binary).write(reinterpret_cast<const char*>(values.data()), std::streamsize(2 * values.size()));
     }
     VolumeSource source;
@@ -244,7 +266,7 @@ int blobs(const BlobOptions& o) {
     layout.dims = o.dims;
     layout.type = RawVoxelType::UInt16;
     source.raw_layout = layout;
-    source.multi_label = !o.binary;
+    source.multi_label = !o.binary && o.ball_faces == 0;
     PipelineOptions options;  // the defaults of dsreg regularize
     const double cpu_start = cpu_seconds();
     const auto wall_start = std::chrono::steady_clock::now();
@@ -263,7 +285,7 @@ int blobs(const BlobOptions& o) {
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
     const double cpu = cpu_seconds() - cpu_start;
-    nlohmann::json line = {{"mode", o.binary ? "binary" : "labels"},
+    nlohmann::json line = {{"mode", o.ball_faces > 0 ? "ball" : o.binary ? "binary" : "labels"},
                            {"labels", o.binary ? 1 : std::int64_t(result.label_meshes.size())},
                            {"blobs", o.labels},
                            {"dims", o.dims},
@@ -305,6 +327,7 @@ int main(int argc, char** argv) {
                 else if (a == "--radius") o.radius = std::stod(value());
                 else if (a == "--seed") o.seed = unsigned(std::stoul(value()));
                 else if (a == "--binary") o.binary = true;
+                else if (a == "--ball-faces") o.ball_faces = std::stoll(value());
                 else if (a == "--out") o.out = value();
                 else if (a == "--input-file") o.input_file = value();
                 else throw Error("unknown option " + a);

@@ -11,8 +11,6 @@ namespace dsreg {
 
 namespace surface_detail {
 
-namespace {
-
 /// Corner offsets (along the two tangent axes b = axis+1, c = axis+2) listed counter-clockwise
 /// seen from outside: e_b × e_c = e_axis, so (0,0),(1,0),(1,1),(0,1) turns positively around
 /// +e_axis and must be reversed for a face whose normal is −e_axis.
@@ -20,8 +18,6 @@ constexpr int kCornerOffsets[2][4][2] = {
     {{0, 0}, {0, 1}, {1, 1}, {1, 0}},  // sign −1
     {{0, 0}, {1, 0}, {1, 1}, {0, 1}},  // sign +1
 };
-
-}  // namespace
 
 std::array<Pointel, 4> corner_pointels(const Surfel& s) {
     const int a = s.axis, b = (a + 1) % 3, c = (a + 2) % 3;
@@ -104,17 +100,12 @@ struct IndexLabels {
 /// The in-plane axis direction that crosses edge e (corner e → corner e+1) of surfel s,
 /// pointing away from the face: returns (axis, sign).
 std::pair<int, int> edge_crossing_direction(const Surfel& s, int e) {
-    const auto corners = corner_pointels(s);
-    const Pointel& p = corners[e];
-    const Pointel& q = corners[(e + 1) % 4];
-    // The edge runs along the tangent axis where p and q differ; the other tangent axis crosses
-    // it, towards the side of the quad where the edge lies.
-    const int a = s.axis;
-    for (int d = 0; d < 3; ++d) {
-        if (d == a || p[d] != q[d]) continue;
-        return {d, p[d] > s.voxel[d] ? 1 : -1};
-    }
-    return {(a + 1) % 3, 1};  // not reached: two corners of a quad differ along exactly one axis
+    const int a = s.axis, b = (a + 1) % 3, c = (a + 2) % 3;
+    const int side = s.sign > 0 ? 1 : 0;
+    const int* o0 = surface_detail::kCornerOffsets[side][e];
+    const int* o1 = surface_detail::kCornerOffsets[side][(e + 1) % 4];
+    if (o0[0] == o1[0]) return {b, o0[0] == 1 ? 1 : -1};
+    return {c, o0[1] == 1 ? 1 : -1};
 }
 
 int direction_code(int axis, int sign) { return 2 * axis + (sign > 0 ? 1 : 0); }
