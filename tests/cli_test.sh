@@ -179,6 +179,11 @@ check "--labels keeps the labels asked for" test -s "$work/some-3.obj" -a -s "$w
 check "--labels drops the others" test ! -e "$work/some-7.obj"
 summary=$("$DSREG" regularize "$work/labels.raw" --raw-dims 8,6,6 --multi-label -o "$work/labels.stl" 2>&1)
 check "summary line counts labels" grep -q "3 labels" <<<"$summary"
+"$DSREG" regularize "$work/labels.raw" --raw-dims 8,6,6 --multi-label --export-normals "$work/labels.normals" \
+    -o "$work/exported.obj" -q
+"$DSREG" regularize "$work/labels.raw" --raw-dims 8,6,6 --multi-label --normals-file "$work/labels.normals" \
+    -o "$work/imported.obj" -q
+check "a label map's normals read back give the same surfaces" cmp -s "$work/exported-7.obj" "$work/imported-7.obj"
 expect_error "--min and --multi-label" "--min chooses one object" regularize "$work/labels.raw" --raw-dims 8,6,6 \
     --multi-label --min 3 -o "$work/out.ply"
 expect_error "--labels of an absent label" "no voxel has the label 5" regularize "$work/labels.raw" --raw-dims 8,6,6 \

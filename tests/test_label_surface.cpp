@@ -10,6 +10,7 @@
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/label_surface.hpp"
+#include "dsreg/pipeline.hpp"
 #include "test_support.hpp"
 
 namespace dsreg {
@@ -72,6 +73,7 @@ void expect_same_surface(const DigitalSurface& complex, const LabelMesh& mesh, c
 /// Every label's mesh against its indicator's surface; own vertices sit on the complex's vertex.
 void expect_label_surfaces(const LabelVolume& labels, Connectivity c) {
     const DigitalSurface complex = extract_digital_surface(labels, c);
+    EXPECT_EQ(count_surfels(labels), complex.face_count());  // the --max-memory count, without the surface
     const std::vector<LabelMesh> meshes = label_meshes(complex);
     const std::vector<std::int64_t> counts = labels.voxel_counts();
     std::size_t next = 0;

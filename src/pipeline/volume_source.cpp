@@ -56,35 +56,33 @@ std::uint64_t parse_memory_size(const std::string& option, const std::string& te
     return static_cast<std::uint64_t>(bytes);
 }
 
-std::int64_t count_surfels(const BinaryVolume& volume) {
-    const VoxelGrid& g = volume.grid;
+namespace {
+
+/// Faces between 6-neighbours of different labels (outside the grid is label 0), each once:
+/// towards +x, +y, +z, and across the grid's lower borders. One pass, no allocation.
+template <class LabelAt>
+std::int64_t count_faces(const VoxelGrid& g, LabelAt label) {
     const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
     std::int64_t count = 0;
 #pragma omp parallel for schedule(static) reduction(+ : count)
     for (std::int64_t k = 0; k < nz; ++k)
         for (std::int64_t j = 0; j < ny; ++j)
             for (std::int64_t i = 0; i < nx; ++i) {
-                if (!volume.inside(i, j, k)) continue;
-                count += !volume.inside(i - 1, j, k) + !volume.inside(i + 1, j, k) + !volume.inside(i, j - 1, k) +
-                         !volume.inside(i, j + 1, k) + !volume.inside(i, j, k - 1) + !volume.inside(i, j, k + 1);
+                const std::uint32_t l = label(i, j, k);
+                count += (l != label(i + 1, j, k)) + (l != label(i, j + 1, k)) + (l != label(i, j, k + 1));
+                count += (i == 0 && l != 0) + (j == 0 && l != 0) + (k == 0 && l != 0);
             }
     return count;
 }
 
+}  // namespace
+
+std::int64_t count_surfels(const BinaryVolume& volume) {
+    return count_faces(volume.grid, [&](std::int64_t i, std::int64_t j, std::int64_t k) { return volume.inside(i, j, k) ? 1u : 0u; });
+}
+
 std::int64_t count_surfels(const LabelVolume& volume) {
-    const VoxelGrid& g = volume.grid;
-    const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
-    std::int64_t count = 0;
-#pragma omp parallel for schedule(static) reduction(+ : count)
-    for (std::int64_t k = 0; k < nz; ++k)
-        for (std::int64_t j = 0; j < ny; ++j)
-            for (std::int64_t i = 0; i < nx; ++i) {
-                const std::uint32_t l = volume.label(i, j, k);
-                // Each face once: towards +x, +y, +z, and the grid's lower borders.
-                count += (l != volume.label(i + 1, j, k)) + (l != volume.label(i, j + 1, k)) + (l != volume.label(i, j, k + 1));
-                count += (i == 0 && l != 0) + (j == 0 && l != 0) + (k == 0 && l != 0);
-            }
-    return count;
+    return count_faces(volume.grid, [&](std::int64_t i, std::int64_t j, std::int64_t k) { return volume.label(i, j, k); });
 }
 
 double estimate_run_memory(std::int64_t voxels, std::int64_t surfels, bool factorization, int bytes_per_voxel) {
