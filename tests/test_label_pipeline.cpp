@@ -137,32 +137,36 @@ TEST(LabelPipeline, WrittenSurfacesShareTheirInterfacesBitForBit) {
     const auto folder = fresh_folder("shared");
     const PipelineOptions options = cholmod_options();
     PipelineResult result = run_shape("sectors", 1.0, options);
-    PipelineOutputs outputs;
-    outputs.mesh = (folder / "sectors.ply").string();
-    write_pipeline_outputs(result, options, outputs, VolumeSource{});
+    // PLY face properties, and VTK cell data (legacy FIELD arrays, XML CellData): 3D Slicer's formats.
+    for (const std::string extension : {"ply", "vtk", "vtp"}) {
+        SCOPED_TRACE(extension);
+        PipelineOutputs outputs;
+        outputs.mesh = (folder / ("sectors." + extension)).string();
+        write_pipeline_outputs(result, options, outputs, VolumeSource{});
 
-    const PolygonMesh complex = read_mesh(outputs.mesh);
-    ASSERT_EQ(complex.face_integers.size(), 2u);
-    EXPECT_EQ(complex.face_integers[0].first, "inner_label");
-    EXPECT_EQ(complex.face_integers[1].first, "outer_label");
-    EXPECT_EQ(complex.faces.rows(), result.surface.face_count());  // every interface face once
-    std::map<std::int64_t, std::set<Position>> positions_of;
-    for (std::int64_t value = 1; value <= 3; ++value) {
-        const PolygonMesh mesh = read_mesh(label_output_path(outputs.mesh, value));
-        for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v) positions_of[value].insert(position(mesh.vertices, v));
-    }
-    std::int64_t shared_faces = 0;
-    for (Eigen::Index f = 0; f < complex.faces.rows(); ++f) {
-        const int inner = complex.face_integers[0].second[f], outer = complex.face_integers[1].second[f];
-        ASSERT_GT(inner, outer);
-        for (int k = 0; k < 4; ++k) {
-            const Position p = position(complex.vertices, complex.faces(f, k));
-            EXPECT_TRUE(positions_of[inner].count(p)) << "label " << inner << " lacks a vertex of its face";
-            if (outer != 0) EXPECT_TRUE(positions_of[outer].count(p)) << "label " << outer << " lacks a vertex of its face";
+        const PolygonMesh complex = read_mesh(outputs.mesh);
+        ASSERT_EQ(complex.face_integers.size(), 2u);
+        EXPECT_EQ(complex.face_integers[0].first, "inner_label");
+        EXPECT_EQ(complex.face_integers[1].first, "outer_label");
+        EXPECT_EQ(complex.faces.rows(), result.surface.face_count());  // every interface face once
+        std::map<std::int64_t, std::set<Position>> positions_of;
+        for (std::int64_t value = 1; value <= 3; ++value) {
+            const PolygonMesh mesh = read_mesh(label_output_path(outputs.mesh, value));
+            for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v) positions_of[value].insert(position(mesh.vertices, v));
         }
-        shared_faces += outer != 0;
+        std::int64_t shared_faces = 0;
+        for (Eigen::Index f = 0; f < complex.faces.rows(); ++f) {
+            const int inner = complex.face_integers[0].second[f], outer = complex.face_integers[1].second[f];
+            ASSERT_GT(inner, outer);
+            for (int k = 0; k < 4; ++k) {
+                const Position p = position(complex.vertices, complex.faces(f, k));
+                EXPECT_TRUE(positions_of[inner].count(p)) << "label " << inner << " lacks a vertex of its face";
+                if (outer != 0) EXPECT_TRUE(positions_of[outer].count(p)) << "label " << outer << " lacks a vertex of its face";
+            }
+            shared_faces += outer != 0;
+        }
+        EXPECT_GT(shared_faces, 100);
     }
-    EXPECT_GT(shared_faces, 100);
 }
 
 TEST(LabelPipeline, EachLabelIsClosedOrientedOutwardWithItsDigitalTopology) {

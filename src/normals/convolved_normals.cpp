@@ -87,6 +87,11 @@ void convolve_trivial_normals(const DigitalSurface& surface, double radius, Inte
     const double cell_size = std::max(radius, 0.25 * surface.grid.spacing.minCoeff());
     const CellBins bins = bin_centres(surface, centres, cell_size);
     const double r2 = radius * radius;
+    // Each trivial normal weighs its face's area: on an anisotropic grid the faces across axis a
+    // are spacing_b·spacing_c large, and the area-weighted sum of the trivial normals over a
+    // patch is its flux, which points along the patch's normal whatever the spacing.
+    const Eigen::Vector3d& h = surface.grid.spacing;
+    const Eigen::Vector3d area(h.y() * h.z(), h.x() * h.z(), h.x() * h.y());
 #pragma omp parallel for schedule(dynamic, 16)
     for (std::int64_t c = 0; c < std::int64_t(bins.cells.size()); ++c) {
         bool any = wanted.empty();
@@ -105,7 +110,7 @@ void convolve_trivial_normals(const DigitalSurface& surface, double radius, Inte
                     if (d2 > r2) continue;
                     const Surfel& s = surface.surfels[std::size_t(g)];
                     const double q2 = 1.0 - d2 / r2;
-                    sum[s.axis] += kernel == IntegralInvariantKernel::ball ? s.sign : s.sign * q2 * q2;
+                    sum[s.axis] += (kernel == IntegralInvariantKernel::ball ? s.sign : s.sign * q2 * q2) * area[s.axis];
                 }
             const double norm = sum.norm();
             // Opposite sides of a plate thinner than 2r can cancel out: keep the surfel's own normal.
