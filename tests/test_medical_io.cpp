@@ -80,6 +80,17 @@ const FormatCase kFormats[] = {
     {"a.tif", 1e-6, false, false},
 };
 
+/// The geometry a format keeps of `grid`.
+VoxelGrid grid_as_stored(const VoxelGrid& grid, const FormatCase& format) {
+    VoxelGrid expected = grid;
+    if (!format.keeps_direction) expected.direction.setIdentity();
+    if (!format.keeps_origin) {
+        expected.origin.setZero();
+        expected.spacing.z() = 1;
+    }
+    return expected;
+}
+
 TEST(MedicalIo, EveryFormatRoundTripsTheMaskAndTheGeometry) {
     ScratchFolder scratch("medical-roundtrip");
     const VoxelGrid grid = test::oblique_grid({24, 20, 16});
@@ -98,13 +109,7 @@ TEST(MedicalIo, EveryFormatRoundTripsTheMaskAndTheGeometry) {
             inside += labels[n] > 0;
         }
         EXPECT_GT(inside, 100);
-        VoxelGrid expected = grid;
-        if (!format.keeps_direction) expected.direction.setIdentity();
-        if (!format.keeps_origin) {
-            expected.origin.setZero();
-            expected.spacing.z() = 1;
-        }
-        expect_same_grid(volume.grid, expected, format.geometry_tolerance);
+        expect_same_grid(volume.grid, grid_as_stored(grid, format), format.geometry_tolerance);
         // Whatever the format, the direction the pipeline gets is orthonormal.
         EXPECT_LT((volume.grid.direction.transpose() * volume.grid.direction - Eigen::Matrix3d::Identity()).norm(), 1e-12);
     }
@@ -143,13 +148,7 @@ TEST(MedicalIo, EveryFormatReadsAsTheSameLabelMapWithItsGeometry) {
         EXPECT_EQ(info.value_type, "uint16");
         EXPECT_EQ(info.world_geometry, format.keeps_origin);
         expect_label_map(read, labels);
-        VoxelGrid expected = grid;
-        if (!format.keeps_direction) expected.direction.setIdentity();
-        if (!format.keeps_origin) {
-            expected.origin.setZero();
-            expected.spacing.z() = 1;
-        }
-        expect_same_grid(read.grid, expected, format.geometry_tolerance);
+        expect_same_grid(read.grid, grid_as_stored(grid, format), format.geometry_tolerance);
     }
     for (const bool fortran : {false, true}) {  // C order is read plane by plane
         SCOPED_TRACE(fortran ? "fortran.npy" : "c.npy");
