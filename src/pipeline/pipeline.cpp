@@ -150,7 +150,9 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
                                                result.weights, solver, result.extension_report);
     clock.finish(result.regularization.solve.solver + ", relative residual " +
                  format("%.2e", result.regularization.solve.relative_residual));
-    if (o.validity != ValidityMode::Off) check_and_repair(o, result, clock);
+    // The check and repair are made for closed manifolds; a label complex is not one along its
+    // junctions, so label maps skip them (docs/multi-label.md).
+    if (o.validity != ValidityMode::Off && !loaded.labels) check_and_repair(o, result, clock);
     result.faces_against_field =
         count_faces_against_field(result.regularization.positions, result.surface.quads, result.field.normals);
     if (loaded.labels) {

@@ -295,35 +295,55 @@ void build_vertices(DigitalSurface& surface) {
 }
 
 /// Edge of face g glued to edge e of face f (the edge of g between the same two pointels).
-int matching_edge(const DigitalSurface& surface, std::int32_t f, int e, std::int32_t g) {
+int matching_edge(const DigitalSurface& surface, std::int64_t f, int e, std::int64_t g) {
     const auto corners = corner_pointels(surface.surfels[static_cast<std::size_t>(f)]);
     bool same = false;
     return surface_detail::edge_between(corner_pointels(surface.surfels[static_cast<std::size_t>(g)]), corners[e],
                                         corners[(e + 1) % 4], same);
 }
 
-/// A linel of four surfels f1, f2, f3, f4 (f1 and f3 run along it in the same direction, f2 and
-/// f4 the other way) is glued f1–f2, f3–f4 or f1–f4, f3–f2. If both its end pointels come out
-/// with a single vertex, its two glued edges join the same two vertices: the surface is pinched
-/// along the linel, and no mesh with straight edges can separate the two sheets there (e.g. two
-/// voxels touching by one edge, joined by 26-connectivity). The other gluing splits both end
-/// vertices in two (around each end pointel the umbrella through the linel twice becomes two
-/// umbrellas), which the regularization can pull apart. Re-glues such linels of a one-sided
-/// surface (binary volume), at most one per vertex per call (two re-gluings at one pointel could
-/// merge its umbrellas again); returns how many. The vertices must be rebuilt afterwards.
-std::int64_t reglue_pinched_linels(DigitalSurface& surface, const std::vector<std::uint8_t>& four_surfel_edges) {
+/// A linel of four surfels of one label's surface, f1, f2, f3, f4 (f1 and f3 run along it in
+/// the same direction, f2 and f4 the other way), is glued f1–f2, f3–f4 or f1–f4, f3–f2. If both
+/// its end pointels come out with a single vertex of that label's surface, its two glued edges
+/// join the same two vertices: the surface is pinched along the linel, and no mesh with straight
+/// edges can separate the two sheets there (e.g. two voxels touching by one edge, joined by
+/// 26-connectivity). The other gluing splits both end vertices in two (around each end pointel
+/// the umbrella through the linel twice becomes two umbrellas), which the regularization can
+/// pull apart. Re-glues such linels, at most one per vertex per call (two re-gluings at one
+/// pointel could merge its umbrellas again); returns how many. `four_surfel_edges[side]` marks
+/// the edges on linels of four surfels in the surface of the label on that side of each face.
+/// The vertices must be rebuilt afterwards.
+std::int64_t reglue_pinched_linels(DigitalSurface& surface, const std::vector<std::uint8_t> four_surfel_edges[2]) {
+    const std::int64_t m = surface.face_count();
+    const int sides = surface_detail::label_sides(surface);
+    UnionFind corners(static_cast<std::size_t>(4 * sides * m));
+    surface_detail::unite_label_corners(surface, sides, corners);  // classes: the labels' own vertices
     struct FaceEdge {
-        std::int32_t from, to, face;
-        int edge;
-        bool operator<(const FaceEdge& o) const { return std::tie(from, to, face) < std::tie(o.from, o.to, o.face); }
+        std::uint32_t from, to;  // the label's own vertices, in the label's orientation
+        std::int64_t face;
+        int side, edge;
+        bool operator<(const FaceEdge& o) const {
+            return std::tie(from, to, face, side) < std::tie(o.from, o.to, o.face, o.side);
+        }
     };
     std::vector<FaceEdge> edges;
-    for (std::int64_t f = 0; f < surface.face_count(); ++f)
-        for (int e = 0; e < 4; ++e)
-            if (four_surfel_edges[static_cast<std::size_t>(f)] & (1u << e))
-                edges.push_back({surface.quads(f, e), surface.quads(f, (e + 1) % 4), std::int32_t(f), e});
+    for (int side = 0; side < sides; ++side)
+        for (std::int64_t f = 0; f < m; ++f)
+            for (int e = 0; e < 4; ++e)
+                if (four_surfel_edges[side][static_cast<std::size_t>(f)] & (1u << e)) {
+                    const std::uint32_t first = corners.find(label_corner(f, side, e, sides));
+                    const std::uint32_t second = corners.find(label_corner(f, side, (e + 1) % 4, sides));
+                    // the outer side sees the face from behind: its edges run the other way
+                    edges.push_back(side == 0 ? FaceEdge{first, second, f, side, e} : FaceEdge{second, first, f, side, e});
+                }
     std::sort(edges.begin(), edges.end());
-    std::vector<std::int32_t> touched;
+    const auto adjacency = [&](int side) -> FaceMatrix& {
+        return side == 0 ? surface.adjacent_face : surface.adjacent_face_outer;
+    };
+    const auto side_of = [&](std::int64_t face, std::uint32_t label) {
+        return surface.face_labels[static_cast<std::size_t>(face)].inner == label ? 0 : 1;
+    };
+    std::vector<std::uint32_t> touched;
     std::int64_t reglued = 0;
     for (std::size_t i = 0; i + 1 < edges.size(); ++i) {
         const FaceEdge &one = edges[i], &three = edges[i + 1];
@@ -333,14 +353,16 @@ std::int64_t reglue_pinched_linels(DigitalSurface& surface, const std::vector<st
             continue;
         touched.push_back(one.from);
         touched.push_back(one.to);
-        const std::int32_t two = surface.adjacent_face(one.face, one.edge);
-        const std::int32_t four = surface.adjacent_face(three.face, three.edge);
+        const FaceLabels& labels = surface.face_labels[static_cast<std::size_t>(one.face)];
+        const std::uint32_t label = one.side == 0 ? labels.inner : labels.outer;
+        const std::int64_t two = adjacency(one.side)(one.face, one.edge);
+        const std::int64_t four = adjacency(three.side)(three.face, three.edge);
         const int two_edge = matching_edge(surface, one.face, one.edge, two);
         const int four_edge = matching_edge(surface, three.face, three.edge, four);
-        surface.adjacent_face(one.face, one.edge) = four;
-        surface.adjacent_face(four, four_edge) = one.face;
-        surface.adjacent_face(three.face, three.edge) = two;
-        surface.adjacent_face(two, two_edge) = three.face;
+        adjacency(one.side)(one.face, one.edge) = static_cast<std::int32_t>(four);
+        adjacency(side_of(four, label))(four, four_edge) = static_cast<std::int32_t>(one.face);
+        adjacency(three.side)(three.face, three.edge) = static_cast<std::int32_t>(two);
+        adjacency(side_of(two, label))(two, two_edge) = static_cast<std::int32_t>(three.face);
         ++reglued;
         ++i;
     }
@@ -403,19 +425,19 @@ DigitalSurface extract(const Labels& label, Connectivity connectivity, std::vect
     DigitalSurface surface;
     surface.grid = label.grid();
     surface.label_values = std::move(label_values);
-    std::vector<std::uint8_t> four_surfel_edges, four_surfel_edges_outer;
-    pair_face_edges(label, index, connectivity, 0, surface.adjacent_face, four_surfel_edges);
-    pair_face_edges(label, index, connectivity, 1, surface.adjacent_face_outer, four_surfel_edges_outer);
+    std::vector<std::uint8_t> four_surfel_edges[2];
+    pair_face_edges(label, index, connectivity, 0, surface.adjacent_face, four_surfel_edges[0]);
+    pair_face_edges(label, index, connectivity, 1, surface.adjacent_face_outer, four_surfel_edges[1]);
     surface.surfels = std::move(index.surfels);
     surface.face_labels = std::move(index.labels);
     index = SurfelIndex();
     surface.quads.resize(std::int64_t(surface.surfels.size()), 4);
     build_vertices(surface);
-    // Pinched linels are opened on binary volumes; between labels they are left as extracted.
-    while (!two_sided && reglue_pinched_linels(surface, four_surfel_edges) > 0) {
-        const std::int64_t before = surface.vertex_count();
+    // Each re-gluing splits two vertices of a label's own surface, so the rounds are few (one
+    // per pinched linel sharing a vertex with another); the bound only guards against a bug.
+    for (int round = 0; reglue_pinched_linels(surface, four_surfel_edges) > 0; ++round) {
+        if (round == 1000) throw Error("internal error: pinched linels keep coming back");
         build_vertices(surface);
-        if (surface.vertex_count() <= before) throw Error("internal error: re-gluing a pinched linel split no vertex");
     }
     label_components(surface);
     surface.split_pointel_count = count_split_pointels(surface);
