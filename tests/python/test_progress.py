@@ -23,7 +23,7 @@ def test_progress_sees_every_stage():
     assert events == [(stage, fraction) for stage in stages for fraction in (0.0, 1.0)]
     events.clear()
     dsreg.regularize(None, shape="sphere1", h=0.2, normals="at", progress=lambda s, f: events.append(s))
-    assert events[::2] == ["digitize", "surface", "normals", "at", "regularize"]
+    assert events[::2] == ["digitize", "surface", "normals", "at", "regularize", "validity"]
 
 
 class Stop(Exception):
