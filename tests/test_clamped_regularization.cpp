@@ -4,12 +4,14 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "dsreg/box_qp.hpp"
 #include "dsreg/clamped_regularization.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/implicit_shape.hpp"
+#include "dsreg/label_surface.hpp"
 #include "dsreg/normals.hpp"
 #include "test_support.hpp"
 
@@ -145,11 +147,30 @@ TEST(BoxQp, ReturnsAnInteriorUnconstrainedMinimizerUntouched) {
     EXPECT_LT((qp.R * x - qp.b).norm(), 1e-10 * qp.b.norm());
 }
 
+TEST(BoxQp, InfiniteBoundsLeaveCoordinatesFree) {
+    const double infinity = std::numeric_limits<double>::infinity();
+    for (unsigned seed = 200; seed < 210; ++seed) {
+        SmallQp open = random_qp(6, seed), far = open;
+        for (int i : {0, 3}) open.lower[i] = -infinity, far.lower[i] = -1e8;  // free below
+        for (int i : {1, 3, 4}) open.upper[i] = infinity, far.upper[i] = 1e8;  // free above
+        BoxQpReport report;
+        const Eigen::VectorXd x = solve_small(open, {}, report);
+        SCOPED_TRACE("seed " + std::to_string(seed));
+        EXPECT_TRUE(report.converged);
+        EXPECT_LT((x - exhaustive_box_qp(far)).lpNorm<Eigen::Infinity>(), 1e-9);
+    }
+}
+
 TEST(BoxQp, RejectsInconsistentProblems) {
     SmallQp qp = random_qp(4, 3);
     qp.lower[2] = 2.0;  // above upper[2] = 1
     BoxQpReport report;
     EXPECT_THROW(solve_small(qp, {}, report), Error);
+    for (const double bad : {std::nan(""), std::numeric_limits<double>::infinity()}) {
+        SmallQp empty = random_qp(4, 3);
+        empty.lower[1] = bad;  // NaN, or a lower bound of +inf: no point
+        EXPECT_THROW(solve_small(empty, {}, report), Error);
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -214,7 +235,7 @@ TEST(ClampedRegularization, EveryVertexStaysInItsBox) {
 /// `at_bounds` counts the coordinates on a bound.
 double kkt_violation(const DigitalSurface& surface, const PointMatrix& normals, const PointMatrix& positions, double half_width,
                      std::int64_t& at_bounds) {
-    const VertexLinks links = vertex_links(surface.quads, surface.vertex_count());
+    const VertexLinks links = fairness_links(surface);  // the quad links on a binary surface
     const RegularizationSystem s = assemble_regularization_system(surface.vertices, surface.quads, links, normals, RegularizationWeights{});
     Eigen::VectorXd lower, upper;
     clamp_bounds(surface, half_width, lower, upper);
@@ -276,6 +297,29 @@ TEST(ClampedRegularization, IterativeAndFactoredSolvesReachTheSameKktPoint) {
         EXPECT_EQ(classify_voxel_centres(c.volume, r->positions, c.surface.quads).wrong(), 0);
     }
     // a strictly convex QP has one minimizer: both are within rounding of it
+    EXPECT_LT((a.positions - b.positions).cwiseAbs().maxCoeff(), 1e-6);
+}
+
+TEST(ClampedRegularization, OnALabelMapIterativeAndFactoredSolvesReachTheKktPointOfTheJunctionLinks) {
+    // The library's clamped mode on a label complex (the pipeline refuses --clamp with
+    // --multi-label): R has the junction-aware links on every path, the large component by amg
+    // and CG, the small ones (one with a junction curve) by CHOLMOD.
+    const LabelVolume labels = test::sectors_and_small_parts();
+    const DigitalSurface surface = extract_digital_surface(labels, Connectivity::TwentySix);
+    const PointMatrix normals = integral_invariant_normals(labels, surface, 3.0);
+    ClampOptions direct, iterative;
+    direct.solver.kind = SolverKind::Cholmod;
+    iterative.solver.kind = SolverKind::Amg;
+    const ClampedRegularizationResult a = regularize_clamped(surface, normals, RegularizationWeights{}, direct);
+    const ClampedRegularizationResult b = regularize_clamped(surface, normals, RegularizationWeights{}, iterative);
+    EXPECT_GT(b.clamp.qp.cg_iterations, 0) << "the large component must take the iterative path";
+    for (const ClampedRegularizationResult* r : {&a, &b}) {
+        EXPECT_TRUE(r->clamp.qp.converged);
+        EXPECT_GT(r->clamp.unclamped_vertices_outside, 0);
+        std::int64_t at_bounds = 0;
+        EXPECT_LT(kkt_violation(surface, normals, r->positions, direct.half_width, at_bounds), 1e-10);
+        EXPECT_GT(at_bounds, 0);
+    }
     EXPECT_LT((a.positions - b.positions).cwiseAbs().maxCoeff(), 1e-6);
 }
 

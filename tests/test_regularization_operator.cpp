@@ -11,6 +11,7 @@
 #include "../src/regularization/regularization_operator.hpp"
 #include "../src/regularization/smoothed_aggregation.hpp"
 #include "dsreg/implicit_shape.hpp"
+#include "dsreg/label_surface.hpp"
 #include "dsreg/normals.hpp"
 #include "dsreg/regularization.hpp"
 #include "dsreg/regularization_metrics.hpp"
@@ -102,6 +103,64 @@ TEST(RegularizationOperator, ProductEqualsTheAssembledMatrix) {
     }
 }
 
+/// The complex of test::sectors_and_small_parts() with the pipeline's label field (integral
+/// invariants of each face's inner label, interface normals near the junctions) and γ = 1, where
+/// the fairness term weighs.
+struct LabelCase {
+    DigitalSurface surface;
+    VertexLinks links;  ///< fairness_links: junction-aware
+    PointMatrix normals;
+    RegularizationWeights weights;
+};
+
+const LabelCase& label_case() {
+    static const LabelCase c = [] {
+        LabelCase c;
+        const LabelVolume labels = test::sectors_and_small_parts();
+        c.surface = extract_digital_surface(labels, Connectivity::TwentySix);
+        c.links = fairness_links(c.surface);
+        c.normals = integral_invariant_normals(labels, c.surface, 3.0);
+        use_interface_normals_near_junctions(labels, c.surface, 3.0, c.normals);
+        c.weights.gamma = 1.0;
+        return c;
+    }();
+    return c;
+}
+
+TEST(RegularizationOperator, OnALabelComplexProductEqualsTheAssembledMatrixOfTheJunctionLinks) {
+    const LabelCase& c = label_case();
+    const Junctions junctions = find_junctions(c.surface, complex_edges(c.surface));
+    ASSERT_GT(junctions.point_count, 0);
+    ASSERT_GT(junctions.vertex_count - junctions.point_count, 0) << "junction curves (two links) needed";
+    ASSERT_NE(c.links.neighbors, vertex_links(c.surface.quads, c.surface.vertex_count()).neighbors);
+    std::mt19937 rng(17);
+    std::normal_distribution<double> normal;
+    std::uniform_real_distribution<double> factor(0.2, 3.0);
+    RegularizationWeights local = c.weights;
+    local.face_beta = Eigen::VectorXd::NullaryExpr(c.surface.face_count(), [&] { return factor(rng); });
+    local.vertex_gamma = Eigen::VectorXd::NullaryExpr(c.surface.vertex_count(), [&] { return factor(rng); });
+    for (Eigen::Index i = 0; i < local.vertex_gamma.size(); i += 5) local.vertex_gamma[i] = 0;
+    for (const RegularizationWeights& w : {c.weights, RegularizationWeights{}, local}) {
+        const RegularizationSystem system = assemble_regularization_system(c.surface.vertices, c.surface.quads, c.links, c.normals, w);
+        const detail::RegularizationOperator R(c.surface.quads, c.links, c.normals, w, c.surface.vertex_count());
+        for (int trial = 0; trial < 3; ++trial) {
+            const Eigen::VectorXd x = Eigen::VectorXd::NullaryExpr(system.rhs.size(), [&] { return normal(rng); });
+            Eigen::VectorXd y;
+            R.multiply(x, y);
+            const Eigen::VectorXd expected = system.matrix * x;
+            EXPECT_LE((y - expected).norm(), 1e-13 * expected.norm());
+            // and both are the Hessian of eq. (1) summed term by term over the same links:
+            // E(p̂) = p̂ᵀR p̂ − 2 bᵀp̂ + c
+            const PointMatrix candidate = c.surface.vertices + 0.5 * unflatten_points(x);
+            const Eigen::VectorXd q = flatten_points(candidate);
+            Eigen::VectorXd Rq;
+            R.multiply(q, Rq);
+            const double by_terms = regularization_energy(candidate, c.surface.vertices, c.surface.quads, c.links, c.normals, w).total(w);
+            EXPECT_NEAR(q.dot(Rq) - 2 * system.rhs.dot(q) + system.constant, by_terms, 1e-9 * by_terms);
+        }
+    }
+}
+
 TEST(RegularizationOperator, SummaryAndFineLevelEqualThoseOfTheAssembledMatrix) {
     for (const Case& c : cases()) {
         const VertexLinks links = vertex_links(c.surface.quads, c.surface.vertex_count());
@@ -143,7 +202,8 @@ TEST(RegularizationOperator, SummaryAndFineLevelEqualThoseOfTheAssembledMatrix) 
 TEST(MeshParts, EveryVertexAndFaceIsInOnePartAndNoFaceCrossesParts) {
     const Case c = make_case("many components", many_components(), 3.0);
     const std::int64_t small = 400;
-    const std::vector<detail::MeshPart> parts = detail::mesh_parts(c.surface.quads, c.surface.vertex_count(), small, 500);
+    const VertexLinks links = vertex_links(c.surface.quads, c.surface.vertex_count());
+    const std::vector<detail::MeshPart> parts = detail::mesh_parts(c.surface.quads, links, c.surface.vertex_count(), small, 500);
     ASSERT_GT(parts.size(), 3u);
     std::vector<int> part_of_vertex(std::size_t(c.surface.vertex_count()), -1), faces_seen(std::size_t(c.surface.face_count()), 0);
     std::int32_t components = 0;
@@ -168,9 +228,46 @@ TEST(MeshParts, EveryVertexAndFaceIsInOnePartAndNoFaceCrossesParts) {
         }
     // A one-component mesh is one whole part.
     const Case ball = make_case("ball", test::make_ball(16, 5.0, 7.5), 3.0);
-    const std::vector<detail::MeshPart> one = detail::mesh_parts(ball.surface.quads, ball.surface.vertex_count(), small, 500);
+    const std::vector<detail::MeshPart> one = detail::mesh_parts(
+        ball.surface.quads, vertex_links(ball.surface.quads, ball.surface.vertex_count()), ball.surface.vertex_count(), small, 500);
     ASSERT_EQ(one.size(), 1u);
     EXPECT_TRUE(one.front().whole);
+}
+
+TEST(MeshParts, ALinkJoinsTwoComponentsAndPartsKeepTheirLinks) {
+    // R couples the two ends of a link (the fairness term), so they must be solved together,
+    // whether or not a face joins them.
+    const Case c = make_case("many components", many_components(), 3.0);
+    const std::int64_t n = c.surface.vertex_count();
+    const VertexLinks links = vertex_links(c.surface.quads, n);
+    const std::vector<detail::MeshPart> separate = detail::mesh_parts(c.surface.quads, links, n, 0, 0);
+    ASSERT_GT(separate.size(), 2u);
+    const std::int32_t a = separate[0].vertices.front(), b = separate[1].vertices.front();
+    VertexLinks joined;  // b added to the link of a
+    joined.offsets = links.offsets;
+    joined.neighbors = links.neighbors;
+    joined.neighbors.insert(joined.neighbors.begin() + links.offsets[std::size_t(a) + 1], b);
+    for (std::int64_t i = a + 1; i <= n; ++i) ++joined.offsets[std::size_t(i)];
+    const std::vector<detail::MeshPart> parts = detail::mesh_parts(c.surface.quads, joined, n, 0, 0);
+    ASSERT_EQ(parts.size(), separate.size() - 1);
+    const auto part_of = [&](std::int32_t v) {
+        for (std::size_t p = 0; p < parts.size(); ++p)
+            if (std::binary_search(parts[p].vertices.begin(), parts[p].vertices.end(), v)) return p;
+        return parts.size();
+    };
+    ASSERT_EQ(part_of(a), part_of(b));
+    // Each part's links, in local indices, are the global links in the same order.
+    for (const detail::MeshPart& part : parts) {
+        const detail::PartMesh mesh = extract_part(part, c.surface.vertices, c.surface.quads, joined, c.normals, c.weights);
+        ASSERT_EQ(mesh.links.offsets.size(), part.vertices.size() + 1);
+        for (std::size_t i = 0; i < part.vertices.size(); ++i) {
+            const std::int32_t g = part.vertices[i];
+            ASSERT_EQ(mesh.links.size(std::int64_t(i)), joined.size(g));
+            for (std::int64_t q = 0; q < joined.size(g); ++q)
+                EXPECT_EQ(part.vertices[std::size_t(mesh.links.neighbors[std::size_t(mesh.links.offsets[i] + q)])],
+                          joined.neighbors[std::size_t(joined.offsets[std::size_t(g)] + q)]);
+        }
+    }
 }
 
 /// Largest vertex distance between two n×3 point sets.
@@ -200,6 +297,43 @@ TEST(Regularize, SolvingComponentByComponentGivesTheSolutionOfTheWholeSystem) {
             const double residual = (system.matrix * flatten_points(r.positions) - system.rhs).norm() / system.rhs.norm();
             EXPECT_NEAR(r.solve.relative_residual, residual, 1e-6 * residual + 1e-12) << what;
         }
+    }
+}
+
+TEST(Regularize, OnALabelMapEverySolverReachesTheDirectSolveOfTheJunctionAwareSystem) {
+    const LabelCase& c = label_case();
+    const std::vector<detail::MeshPart> parts = detail::mesh_parts(c.surface.quads, c.links, c.surface.vertex_count(),
+                                                                   detail::kSmallComponentVertices, detail::kBatchVertices);
+    ASSERT_EQ(parts.size(), 2u);
+    EXPECT_FALSE(parts[0].small);
+    EXPECT_TRUE(parts[1].small);
+    EXPECT_EQ(parts[1].components, 2);
+    const auto direct_solve = [&](const VertexLinks& links) {
+        const RegularizationSystem system = assemble_regularization_system(c.surface.vertices, c.surface.quads, links, c.normals, c.weights);
+        Eigen::VectorXd x = flatten_points(c.surface.vertices);
+        SolverOptions direct;
+        direct.kind = SolverKind::Cholmod;
+        solve_spd(system.matrix, system.rhs, x, direct);
+        return unflatten_points(x);
+    };
+    const PointMatrix exact = direct_solve(c.links);
+    // the junction links matter here: with the quad links the minimizer is another one
+    ASSERT_GT(max_distance(exact, direct_solve(vertex_links(c.surface.quads, c.surface.vertex_count()))), 1e-2);
+    for (SolverKind kind : {SolverKind::Cholmod, SolverKind::Auto, SolverKind::Amg, SolverKind::ConjugateGradient}) {
+        SolverOptions options;
+        options.kind = kind;
+        options.max_error_voxels = kDefaultMaxErrorVoxels;
+        const RegularizationResult r = regularize(c.surface, c.normals, c.weights, options);
+        const std::string what = solver_name(kind);
+        const double distance = max_distance(r.positions, exact);
+        EXPECT_LE(distance, std::max(r.solve.error_bound, 1e-12) * (1 + 1e-6)) << what;
+        EXPECT_LE(r.solve.error_bound, kDefaultMaxErrorVoxels) << what;
+        if (kind == SolverKind::Cholmod) EXPECT_LE(distance, 1e-9) << what;
+        if (kind == SolverKind::Amg) EXPECT_EQ(r.solve.solver, "amg");
+        EXPECT_NEAR(r.energy_after.total(c.weights),
+                    regularization_energy(exact, c.surface.vertices, c.surface.quads, c.links, c.normals, c.weights).total(c.weights),
+                    1e-6 * r.energy_after.total(c.weights))
+            << what;
     }
 }
 

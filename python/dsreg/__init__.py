@@ -80,6 +80,7 @@ EXCLUDED_REGULARIZE_FLAGS = {
     "spacing": "spacing= is an argument of its own (with origin= and affine=)",
     "quiet": "nothing is printed; progress= receives the stages",
     "verbose": "nothing is printed; progress= receives the stages",
+    "progress": "progress= is an argument of its own (a callable: the stages and the solver's iterations)",
 }
 
 #: The flags of ``dsreg eval`` that are not keyword options of evaluate(), and why.
@@ -162,8 +163,11 @@ def regularize(mask, *, affine=None, affine_space="lps", spacing=None, origin=No
         Position of the centre of voxel (0, 0, 0) (default 0).
     progress : callable(stage: str, fraction: float), optional
         Called as each stage starts (fraction 0) and ends (fraction 1): "read" (thresholding an
-        array, reading a file) or "digitize", "surface", "normals", "at", "regularize". It runs
-        on the calling thread; an exception it raises stops the work and propagates.
+        array, reading a file) or "digitize", "surface", "normals", "at", "regularize",
+        "validity"; inside "regularize", an iterative solver also reports each iteration as
+        stage "solve" (fraction: the share of the way to its stop, log scale). It runs on the
+        calling thread; an exception it raises stops the work and propagates (inside the solve:
+        at that iteration).
     **options
         The command line's flags, ``-`` written ``_`` (listed below): values are written as the
         flag's text and checked by the command line's parser (``raw_dims=(4, 5, 6)`` is

@@ -9,6 +9,7 @@
 
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
+#include "dsreg/label_surface.hpp"
 #include "held_solver.hpp"
 #include "mesh_parts.hpp"
 #include "spd_system.hpp"
@@ -155,9 +156,11 @@ ClampedRegularizationResult regularize_clamped(const DigitalSurface& surface, co
         throw Error("normal field has " + std::to_string(normals.rows()) + " vectors for " + std::to_string(surface.face_count()) + " faces");
     ClampedRegularizationResult result;
     auto started = Clock::now();
+    const VertexLinks links = fairness_links(surface);  // junction-aware on a label complex
     Eigen::VectorXd lower, upper;
     clamp_bounds(surface, options.half_width, lower, upper);
-    const std::vector<detail::MeshPart> parts = detail::mesh_parts(surface.quads, n, detail::kSmallComponentVertices, detail::kBatchVertices);
+    const std::vector<detail::MeshPart> parts =
+        detail::mesh_parts(surface.quads, links, n, detail::kSmallComponentVertices, detail::kBatchVertices);
     result.assembly_seconds = seconds_since(started);
 
     const SolverOptions solver = detail::completed_options(options.solver, weights, n, surface.grid.spacing.minCoeff());
@@ -173,9 +176,9 @@ ClampedRegularizationResult regularize_clamped(const DigitalSurface& surface, co
         BoxQpOptions part_qp = qp;
         part_qp.progress = detail::progress_share(qp.progress, done, share);
         done += share;
-        detail::visit_part(part, surface.vertices, surface.quads, normals, weights, [&](const detail::PartView& mesh) {
+        detail::visit_part(part, surface.vertices, surface.quads, links, normals, weights, [&](const detail::PartView& mesh) {
             started = Clock::now();
-            const detail::MeshSystem system(mesh.positions, mesh.quads, mesh.normals, mesh.weights);
+            const detail::MeshSystem system(mesh.positions, mesh.quads, mesh.links, mesh.normals, mesh.weights);
             Eigen::VectorXd part_unconstrained = detail::gather_part(part, unconstrained), part_x;
             const Eigen::VectorXd part_lower = detail::gather_part(part, lower), part_upper = detail::gather_part(part, upper);
             result.assembly_seconds += seconds_since(started);
@@ -203,7 +206,6 @@ ClampedRegularizationResult regularize_clamped(const DigitalSurface& surface, co
 
     result.positions = unflatten_points(x);
     result.clamp.clamped_vertices = vertices_on_their_box(result.positions, lower, upper);
-    const VertexLinks links = vertex_links(surface.quads, n);
     result.energy_before = regularization_energy(surface.vertices, surface.vertices, surface.quads, links, normals, weights);
     result.energy_after = regularization_energy(result.positions, surface.vertices, surface.quads, links, normals, weights);
     result.clamp.unclamped_energy =

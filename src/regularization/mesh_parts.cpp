@@ -15,16 +15,20 @@ std::int32_t find_root(std::vector<std::int32_t>& parent, std::int32_t v) {
     return v;
 }
 
-/// Component of each vertex (vertices sharing a face are in the same one), numbered 0.. in the
-/// order of their smallest vertex.
-std::vector<std::int32_t> vertex_components(const FaceMatrix& quads, std::int64_t n, std::int32_t& count) {
+/// Component of each vertex (vertices sharing a face, or one in the other's link, are in the
+/// same one), numbered 0.. in the order of their smallest vertex.
+std::vector<std::int32_t> vertex_components(const FaceMatrix& quads, const VertexLinks& links, std::int64_t n, std::int32_t& count) {
     std::vector<std::int32_t> parent(static_cast<std::size_t>(n));
     std::iota(parent.begin(), parent.end(), 0);
+    const auto join = [&](std::int32_t u, std::int32_t v) {
+        const std::int32_t a = find_root(parent, u), b = find_root(parent, v);
+        if (a != b) parent[std::size_t(std::max(a, b))] = std::min(a, b);
+    };
     for (Eigen::Index f = 0; f < quads.rows(); ++f)
-        for (Eigen::Index e = 1; e < quads.cols(); ++e) {
-            const std::int32_t a = find_root(parent, quads(f, 0)), b = find_root(parent, quads(f, e));
-            if (a != b) parent[std::size_t(std::max(a, b))] = std::min(a, b);
-        }
+        for (Eigen::Index e = 1; e < quads.cols(); ++e) join(quads(f, 0), quads(f, e));
+    for (std::int64_t i = 0; i < n; ++i)
+        for (std::int64_t q = links.offsets[std::size_t(i)]; q < links.offsets[std::size_t(i + 1)]; ++q)
+            join(std::int32_t(i), links.neighbors[std::size_t(q)]);
     std::vector<std::int32_t> component(static_cast<std::size_t>(n), -1);
     count = 0;
     for (std::int64_t v = 0; v < n; ++v) {
@@ -37,9 +41,10 @@ std::vector<std::int32_t> vertex_components(const FaceMatrix& quads, std::int64_
 
 }  // namespace
 
-std::vector<MeshPart> mesh_parts(const FaceMatrix& quads, std::int64_t n, std::int64_t small_vertices, std::int64_t batch_vertices) {
+std::vector<MeshPart> mesh_parts(const FaceMatrix& quads, const VertexLinks& links, std::int64_t n, std::int64_t small_vertices,
+                                 std::int64_t batch_vertices) {
     std::int32_t count = 0;
-    const std::vector<std::int32_t> component = vertex_components(quads, n, count);
+    const std::vector<std::int32_t> component = vertex_components(quads, links, n, count);
     std::vector<std::int64_t> size(static_cast<std::size_t>(count), 0);
     for (std::int32_t c : component) ++size[std::size_t(c)];
 
@@ -68,8 +73,8 @@ std::vector<MeshPart> mesh_parts(const FaceMatrix& quads, std::int64_t n, std::i
     return parts;
 }
 
-PartMesh extract_part(const MeshPart& part, const PointMatrix& positions, const FaceMatrix& quads, const PointMatrix& normals,
-                      const RegularizationWeights& w) {
+PartMesh extract_part(const MeshPart& part, const PointMatrix& positions, const FaceMatrix& quads, const VertexLinks& links,
+                      const PointMatrix& normals, const RegularizationWeights& w) {
     PartMesh mesh;
     const std::int64_t n = std::int64_t(part.vertices.size()), m = std::int64_t(part.faces.size());
     std::vector<std::int32_t> local(static_cast<std::size_t>(positions.rows()), -1);
@@ -82,6 +87,14 @@ PartMesh extract_part(const MeshPart& part, const PointMatrix& positions, const 
         const std::int32_t g = part.faces[std::size_t(f)];
         for (Eigen::Index e = 0; e < quads.cols(); ++e) mesh.quads(f, e) = local[std::size_t(quads(g, e))];
         mesh.normals.row(f) = normals.row(g);
+    }
+    // The links, in the same order (a vertex's links are in its part: mesh_parts joins them).
+    mesh.links.offsets.assign(std::size_t(n + 1), 0);
+    for (std::int64_t i = 0; i < n; ++i) {
+        const std::int32_t g = part.vertices[std::size_t(i)];
+        for (std::int64_t q = links.offsets[std::size_t(g)]; q < links.offsets[std::size_t(g + 1)]; ++q)
+            mesh.links.neighbors.push_back(local[std::size_t(links.neighbors[std::size_t(q)])]);
+        mesh.links.offsets[std::size_t(i + 1)] = std::int64_t(mesh.links.neighbors.size());
     }
     const auto rows_of = [](const Eigen::VectorXd& values, const std::vector<std::int32_t>& index) {
         Eigen::VectorXd out(values.size() ? Eigen::Index(index.size()) : 0);

@@ -1,9 +1,11 @@
 // dsreg — internal: the mesh cut into independently solved parts.
 //
 // R of eq. (22–23) couples two vertices only if they share a face (the alignment term) or are
-// within two edges of each other (the fairness term), so it is block diagonal over the connected
-// components of the mesh: each component's system can be solved on its own, with the same
-// answer as the whole system. Components of at most `small_vertices` vertices are gathered into
+// within two links of each other (the fairness term), so it is block diagonal over the connected
+// components of the graph of faces and links: each component's system can be solved on its own,
+// with the same answer as the whole system. (The links are those R is built with: the quad links
+// of a binary surface, the junction-aware fairness_links of a label complex, whose components
+// are joined through their junctions.) Components of at most `small_vertices` vertices are gathered into
 // parts of at most about `batch_vertices` vertices (solved directly: a sparse Cholesky factor of a
 // block diagonal matrix is the union of the blocks' factors); every larger component is a part
 // of its own. Real volumes have many tiny components (CT noise: lobster.vol has 417 of at most
@@ -35,38 +37,41 @@ struct MeshPart {
 };
 
 /// Cuts the mesh into parts (see above), largest part first. Every vertex and face is in exactly
-/// one part; a vertex in no face (not in a digital surface) gets a part of small components.
-std::vector<MeshPart> mesh_parts(const FaceMatrix& quads, std::int64_t vertex_count, std::int64_t small_vertices,
-                                 std::int64_t batch_vertices);
+/// one part, and every vertex's links are in its part; a vertex in no face and no link (not in a
+/// digital surface) gets a part of small components.
+std::vector<MeshPart> mesh_parts(const FaceMatrix& quads, const VertexLinks& links, std::int64_t vertex_count,
+                                 std::int64_t small_vertices, std::int64_t batch_vertices);
 
 /// The mesh of one part, with local vertex indices, and the part's rows of the per-vertex and
 /// per-face data.
 struct PartMesh {
     PointMatrix positions;
     FaceMatrix quads;
+    VertexLinks links;
     PointMatrix normals;
     RegularizationWeights weights;
 };
-PartMesh extract_part(const MeshPart& part, const PointMatrix& positions, const FaceMatrix& quads, const PointMatrix& normals,
-                      const RegularizationWeights& weights);
+PartMesh extract_part(const MeshPart& part, const PointMatrix& positions, const FaceMatrix& quads, const VertexLinks& links,
+                      const PointMatrix& normals, const RegularizationWeights& weights);
 
 /// The mesh data of a part as the solvers see it: the whole mesh's own arrays when the part is the
 /// whole mesh (nothing copied), else those of extract_part.
 struct PartView {
     const PointMatrix& positions;
     const FaceMatrix& quads;
+    const VertexLinks& links;
     const PointMatrix& normals;
     const RegularizationWeights& weights;
 };
 template <class Visit>
-void visit_part(const MeshPart& part, const PointMatrix& positions, const FaceMatrix& quads, const PointMatrix& normals,
-                const RegularizationWeights& weights, Visit visit) {
+void visit_part(const MeshPart& part, const PointMatrix& positions, const FaceMatrix& quads, const VertexLinks& links,
+                const PointMatrix& normals, const RegularizationWeights& weights, Visit visit) {
     if (part.whole) {
-        visit(PartView{positions, quads, normals, weights});
+        visit(PartView{positions, quads, links, normals, weights});
         return;
     }
-    const PartMesh mesh = extract_part(part, positions, quads, normals, weights);
-    visit(PartView{mesh.positions, mesh.quads, mesh.normals, mesh.weights});
+    const PartMesh mesh = extract_part(part, positions, quads, links, normals, weights);
+    visit(PartView{mesh.positions, mesh.quads, mesh.links, mesh.normals, mesh.weights});
 }
 
 /// Progress of one part's solve mapped into [first, first + share] of the whole solve.

@@ -2,6 +2,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "dsreg/label_surface.hpp"
 #include "dsreg/regularization.hpp"
 #include "mesh_parts.hpp"
 #include "spd_system.hpp"
@@ -69,7 +70,9 @@ RegularizationResult regularize(const DigitalSurface& surface, const PointMatrix
     const SolverOptions options = detail::completed_options(solver, weights, n, surface.grid.spacing.minCoeff());
 
     auto started = Clock::now();
-    const std::vector<detail::MeshPart> parts = detail::mesh_parts(surface.quads, n, detail::kSmallComponentVertices, detail::kBatchVertices);
+    const VertexLinks links = fairness_links(surface);  // junction-aware on a label complex
+    const std::vector<detail::MeshPart> parts =
+        detail::mesh_parts(surface.quads, links, n, detail::kSmallComponentVertices, detail::kBatchVertices);
     result.assembly_seconds = seconds_since(started);
     Eigen::VectorXd x = flatten_points(surface.vertices);  // warm start at p
     MergedReport merged;
@@ -78,10 +81,10 @@ RegularizationResult regularize(const DigitalSurface& surface, const PointMatrix
         SolverOptions o = part_options(options, part);
         const double share = double(part.vertices.size()) / double(std::max<std::int64_t>(n, 1));
         o.progress = detail::progress_share(options.progress, done, share);
-        detail::visit_part(part, surface.vertices, surface.quads, normals, weights, [&](const detail::PartView& mesh) {
+        detail::visit_part(part, surface.vertices, surface.quads, links, normals, weights, [&](const detail::PartView& mesh) {
             started = Clock::now();
             Eigen::VectorXd local = detail::gather_part(part, x);
-            const detail::MeshSystem system(mesh.positions, mesh.quads, mesh.normals, mesh.weights);
+            const detail::MeshSystem system(mesh.positions, mesh.quads, mesh.links, mesh.normals, mesh.weights);
             result.assembly_seconds += seconds_since(started);
             started = Clock::now();
             const SolveReport r = detail::solve_system(system.system(), system.rhs(), local, o);
@@ -94,7 +97,6 @@ RegularizationResult regularize(const DigitalSurface& surface, const PointMatrix
     }
     result.solve = merged.finish();
     result.positions = unflatten_points(x);
-    const VertexLinks links = vertex_links(surface.quads, n);
     result.energy_before = regularization_energy(surface.vertices, surface.vertices, surface.quads, links, normals, weights);
     result.energy_after = regularization_energy(result.positions, surface.vertices, surface.quads, links, normals, weights);
     return result;

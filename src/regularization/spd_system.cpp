@@ -73,10 +73,9 @@ SolverOptions completed_options(const SolverOptions& options, const Regularizati
     return o;
 }
 
-MeshSystem::MeshSystem(const PointMatrix& positions, const FaceMatrix& quads, const PointMatrix& normals,
+MeshSystem::MeshSystem(const PointMatrix& positions, const FaceMatrix& quads, const VertexLinks& links, const PointMatrix& normals,
                        const RegularizationWeights& weights)
-    : links_(vertex_links(quads, positions.rows())),
-      operator_(quads, links_, normals, weights, positions.rows()),
+    : operator_(quads, links, normals, weights, positions.rows()),
       rhs_(data_rhs(positions, weights)),
       system_(operator_, smallest_eigenvalue_bound(weights, positions.rows())) {}
 

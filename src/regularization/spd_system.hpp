@@ -87,11 +87,12 @@ bool solve_with_multigrid(const SpdSystem& system, const Multigrid& amg, const E
 SolverOptions completed_options(const SolverOptions& options, const RegularizationWeights& weights, std::int64_t vertex_count,
                                 double smallest_spacing);
 
-/// R x = b of eq. (22–23) for one mesh, matrix-free: its links, the operator, the right-hand side
-/// α W0_α p. The mesh data must outlive it.
+/// R x = b of eq. (22–23) for one mesh, matrix-free: the operator over the mesh and the links of
+/// its fairness term (fairness_links of the surface), the right-hand side α W0_α p. The mesh data
+/// must outlive it.
 class MeshSystem {
 public:
-    MeshSystem(const PointMatrix& positions, const FaceMatrix& quads, const PointMatrix& normals,
+    MeshSystem(const PointMatrix& positions, const FaceMatrix& quads, const VertexLinks& links, const PointMatrix& normals,
                const RegularizationWeights& weights);
     MeshSystem(const MeshSystem&) = delete;
     MeshSystem& operator=(const MeshSystem&) = delete;
@@ -99,7 +100,6 @@ public:
     const Eigen::VectorXd& rhs() const { return rhs_; }
 
 private:
-    VertexLinks links_;
     RegularizationOperator operator_;
     Eigen::VectorXd rhs_;
     OperatorSystem system_;

@@ -19,11 +19,21 @@ MASK = ellipsoid((40, 36, 34), (16.2, 13.1, 12.4))
 def test_progress_sees_every_stage():
     events = []
     dsreg.regularize(MASK, progress=lambda stage, fraction: events.append((stage, fraction)))
-    stages = ["read", "surface", "normals", "regularize"]
-    assert events == [(stage, fraction) for stage in stages for fraction in (0.0, 1.0)]
+    stages = ["read", "surface", "normals", "regularize", "validity"]
+    # the iterative solver's iterations ("solve") come inside "regularize", their fraction rising
+    solve = [i for i, (stage, _) in enumerate(events) if stage == "solve"]
+    assert solve and events.index(("regularize", 0.0)) < solve[0] and solve[-1] < events.index(("regularize", 1.0))
+    fractions = [events[i][1] for i in solve]
+    assert fractions == sorted(fractions) and 0 <= fractions[0] and fractions[-1] <= 1
+    ends = [event for event in events if event[0] != "solve"]
+    assert ends == [(stage, fraction) for stage in stages for fraction in (0.0, 1.0)]
     events.clear()
-    dsreg.regularize(None, shape="sphere1", h=0.2, normals="at", progress=lambda s, f: events.append(s))
-    assert events[::2] == ["digitize", "surface", "normals", "at", "regularize"]
+    dsreg.regularize(None, shape="sphere1", h=0.2, normals="at", progress=lambda s, f: events.append((s, f)))
+    # stage starts and ends (the repair inside "validity" reports rounds of unknown fraction, -1;
+    # the solver its iterations)
+    ends = [stage for stage, fraction in events if fraction in (0.0, 1.0) and stage != "solve"]
+    assert ends[::2] == ["digitize", "surface", "normals", "at", "regularize", "validity"]
+    assert ends[1::2] == ends[::2]
 
 
 class Stop(Exception):
@@ -45,6 +55,27 @@ def test_an_exception_from_progress_stops_the_run(exception):
     assert dsreg.regularize(MASK).report["counts"]["surfels"] > 0  # and the module still works
 
 
+def test_an_exception_from_progress_inside_the_solve_stops_it_mid_way():
+    """The iterative solver reports each iteration (stage "solve", inside "regularize"): an
+    exception from progress there stops the solve at that iteration, not at the stage's end."""
+    solve = []
+    dsreg.regularize(MASK, solver="amg", progress=lambda stage, fraction: solve.append(fraction) if stage == "solve" else None)
+    assert len(solve) >= 4, solve  # enough iterations to stop in the middle
+
+    seen = []
+
+    def progress(stage, fraction):
+        seen.append((stage, fraction))
+        if sum(s == "solve" for s, _ in seen) == 2:
+            raise Stop("second iteration")
+
+    with pytest.raises(Stop, match="second iteration"):
+        dsreg.regularize(MASK, solver="amg", progress=progress)
+    assert seen[-1] == ("solve", solve[1])  # nothing after the exception: the solve did not go on
+    assert seen[-1][1] < 1.0
+    assert ("regularize", 0.0) in seen and ("regularize", 1.0) not in seen
+
+
 @pytest.mark.skipif(threading.current_thread() is not threading.main_thread(), reason="signals go to the main thread")
 def test_sigint_raises_keyboard_interrupt():
     """SIGINT while dsreg works: KeyboardInterrupt at the next stage boundary, before the run ends.
@@ -59,7 +90,7 @@ def test_sigint_raises_keyboard_interrupt():
             dsreg.regularize(None, shape="goursat", h=0.15, progress=events.__setitem__)
     finally:
         timer.cancel()
-    assert events.get("regularize") != 1.0, events  # the last stage never ended
+    assert events.get("validity") != 1.0, events  # the last stage never ended
 
 
 def test_the_gil_is_released():
