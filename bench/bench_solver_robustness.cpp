@@ -21,9 +21,7 @@
 #include "dsreg/regularization.hpp"
 #include "dsreg/volume_io.hpp"
 
-#ifndef DSREG_SHARED_DATA_DIR
-#define DSREG_SHARED_DATA_DIR "../shared/data"
-#endif
+// DSREG_SHARED_DATA_DIR: ../shared/data of the source tree (bench/CMakeLists.txt).
 
 namespace {
 

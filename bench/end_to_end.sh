@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# End-to-end timings of `dsreg regularize` (read, surface, normals, solve, write) with per-stage
+# End-to-end timings of `dsreg regularize` (read, surface, normals, solve, validity, write) with per-stage
 # wall time and peak memory taken from the --report JSON, the process's CPU time (user + system,
 # all threads, from /usr/bin/time) and the load average when the case started; and, in the same
 # run, 3D Slicer's labelmap -> closed surface pipeline on the same volume (bench/slicer_pipeline.py,
@@ -8,6 +8,8 @@
 #   bench/end_to_end.sh [DSREG] [SOLVER]     (defaults: build/release/dsreg, the CLI default solver)
 #   DSREG_BENCH_LARGE=1   also goursat h = 0.05 (~10^6 surfels)
 #   DSREG_BENCH_CLAMP=0   without the lobster.vol --clamp case
+#   DSREG_BENCH_VOLUMES="lobster"  only these volumes of ../shared/data (default: all five)
+#   DSREG_BENCH_GOURSAT=0 without the goursat cases
 #   DSREG_BENCH_GROWTH=1  instead: the growth series, goursat h = 0.5 … DSREG_BENCH_MIN_H (default 0.035)
 # The real volumes are those of ../shared/data (read-only, never copied); the goursat cases are
 # digitized to a .vol first (`dsreg digitize`) so that both pipelines read the same file.
@@ -49,10 +51,10 @@ run_case() {  # run_case NAME SLICER_INPUT ARGS...   (SLICER_INPUT empty: no Sli
     slicer_case $slicer_input
     local surfels peak
     surfels=$(field surfels); peak=$(field peak_memory_bytes)
-    printf '| %s | %s | %s | %s | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | **%s** | %s | %.0f | %.2f | %s | %s | %s | %s | %s |\n' "$name" \
+    printf '| %s | %s | %s | %s | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | **%s** | %s | %.0f | %.2f | %s | %s | %s | %s | %s |\n' "$name" \
         "$surfels" "$(grep -o '"solver": "[a-z_]*"' "$work/r.json" | tail -1 | cut -d'"' -f4)" \
         "$(field iterations)" "$(field read)$(field digitize)" "$(field surface)" "$(field normals)" \
-        "$(field assembly)" "$(field solve)" "$(field write)" "$wall" "$cpu" \
+        "$(field assembly)" "$(field solve)" "$(field validity)" "$(field write)" "$wall" "$cpu" \
         "$(awk -v b="$peak" 'BEGIN { print b / 1048576 }')" "$(awk -v b="$peak" -v s="$surfels" 'BEGIN { print b / 1024 / s }')" \
         "${slicer_wall:-–}" "${slicer_cpu:-–}" "$(ratio "$wall" "$slicer_wall")" "$(ratio "$cpu" "$slicer_cpu")" "$load"
 }
@@ -62,8 +64,8 @@ goursat_vol() {  # goursat_vol H: a .vol of goursat at step H in $work
     echo "$work/goursat-$1.vol"
 }
 
-echo "| case | surfels | solver | iterations | read s | surface s | normals s | assembly s | solve s | write s | total s (wall) | CPU s | peak MiB | KiB/surfel | Slicer wall s | Slicer CPU s | wall ratio | CPU ratio | load |"
-echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+echo "| case | surfels | solver | iterations | read s | surface s | normals s | assembly s | solve s | validity s | write s | total s (wall) | CPU s | peak MiB | KiB/surfel | Slicer wall s | Slicer CPU s | wall ratio | CPU ratio | load |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 if [[ ${DSREG_BENCH_GROWTH:-0} == 1 ]]; then
     for h in 0.5 0.25 0.1 0.05 0.035 0.025 0.02 0.015; do
         awk -v h="$h" -v m="${DSREG_BENCH_MIN_H:-0.035}" 'BEGIN { exit !(h >= m) }' || break
@@ -71,10 +73,11 @@ if [[ ${DSREG_BENCH_GROWTH:-0} == 1 ]]; then
     done
     exit 0
 fi
-for f in cat10 bunny-64 Al.100 bunny-128 lobster; do
+for f in ${DSREG_BENCH_VOLUMES:-cat10 bunny-64 Al.100 bunny-128 lobster}; do
     [[ -f $data/$f.vol ]] && run_case "$f.vol" "$data/$f.vol" "$data/$f.vol"
 done
 [[ -f $data/lobster.vol && ${DSREG_BENCH_CLAMP:-1} == 1 ]] && run_case "lobster.vol --clamp" "$data/lobster.vol" "$data/lobster.vol" --clamp
+[[ ${DSREG_BENCH_GOURSAT:-1} == 1 ]] || exit 0
 g=$(goursat_vol 0.25); run_case "goursat h=0.25 .vol, II r=7.56 vx" "$g" "$g" --radius 7.56
 g=$(goursat_vol 0.1); run_case "goursat h=0.1 .vol, II r=13.9 vx" "$g" "$g" --radius 13.9
 if [[ ${DSREG_BENCH_LARGE:-0} == 1 ]]; then
