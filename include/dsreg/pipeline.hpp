@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "dsreg/ambrosio_tortorelli.hpp"
+#include "dsreg/blocks.hpp"
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/implicit_shape.hpp"
 #include "dsreg/mesh.hpp"
@@ -57,6 +58,22 @@ struct LoadedVolume {
 /// Reads or digitizes the volume. Honours max_voxels and max_memory before reading any payload.
 /// Throws dsreg::Error on any problem, including an empty object (naming the file's value range).
 LoadedVolume load_volume(const VolumeSource& source);
+
+/// What the pipeline knows of a volume before reading its voxels, for block-wise runs: the
+/// LoadedVolume that load_volume would return, with an empty mask (grid, description, shape, h
+/// set), from the file's header alone or the shape's digitization grid. --max-memory is not
+/// applied (block-wise runs never hold the whole mask). Throws dsreg::Error as load_volume does.
+LoadedVolume probe_volume(const VolumeSource& source);
+
+/// The voxels of `box` of the volume that `header` (from probe_volume) describes, read by
+/// offsets where the format allows (read_volume_box) or digitized over the box alone
+/// (digitize_box): grid with the header's spacing, dims = box.size(), origin = the centre of
+/// the box's first voxel.
+BinaryVolume load_volume_box(const VolumeSource& source, const LoadedVolume& header, const VoxelBox& box);
+
+/// The error for an object without any voxel: names the input and the value range used (and,
+/// for a file whose values can be read within the limits, the range its values span).
+Error empty_object_error(const VolumeSource& source, bool read_value_range);
 
 /// Parses a memory size: a number of bytes with an optional suffix K, M, G or T (powers of 1024,
 /// optionally followed by "iB" or "B", any case), e.g. "4G", "512MiB", "1.5g", "1000000".
@@ -106,6 +123,19 @@ void parse_epsilon_range(const std::string& text, AmbrosioTortorelliParameters& 
 /// Throws dsreg::Error naming the flag.
 void check_normal_field_options(const NormalFieldOptions& options, bool input_is_shape);
 
+/// How far from a face the normal field of these options looks, for block-wise runs: the field
+/// must be the same in every block, so the options come back with the radius the whole-volume
+/// run would use filled in.
+struct NormalFieldReach {
+    NormalFieldOptions options;  ///< with `radius` set for ii and ctrivial
+    double volume_radius = 0;    ///< the ball of voxels each face reads (ii), physical units
+    double surface_radius = 0;   ///< the ball of surfels each face reads (ctrivial), physical units
+};
+
+/// Throws dsreg::Error for fields that need the whole surface at once (--normals at: its
+/// Ambrosio–Tortorelli solve is global; --normals-file: the file lists the whole surface).
+NormalFieldReach normal_field_reach(const NormalFieldOptions& options, const LoadedVolume& header);
+
 /// The integral-invariant (or convolved trivial) radius used when --radius is not given: for a
 /// shape the multigrid-convergent 3·h^(1/3) (DESIGN.md), at most 1/8 of the largest side of its
 /// box (3·h^(1/3) suits shapes about 10 across; on smaller ones it would make a ball as wide as the
@@ -146,12 +176,26 @@ void check_regularization_extensions(const RegularizationExtensions& options);
 // ---------------------------------------------------------------------------------------------
 // The whole run.
 
+/// Block-wise streaming (block_pipeline.hpp): the volume is read and solved block by block, each
+/// with a halo, and the blocks are welded into one mesh.
+struct BlockOptions {
+    Index3 block_size{0, 0, 0};        ///< --block-size (voxels); 0: the whole volume at once
+    std::optional<std::int64_t> halo;  ///< --block-halo (voxels); unset: default_block_halo
+    int schwarz_sweeps = 0;            ///< --schwarz-sweeps: overlapping Schwarz sweeps after the first pass
+
+    bool enabled() const { return block_size[0] > 0; }
+};
+
 struct PipelineOptions {
     Connectivity connectivity = Connectivity::TwentySix;  ///< --connectivity 6|26
     NormalFieldOptions normals;
     double alpha = 1e-3, beta = 1.0, gamma = 1e-2;  ///< --alpha --beta --gamma (eq. 1)
     SolverKind solver = SolverKind::Auto;           ///< --solver
+    /// --max-error: iterative solvers stop once their error bound is below this, in voxels
+    /// (the smallest voxel side).
+    double max_error_voxels = kDefaultMaxErrorVoxels;
     RegularizationExtensions extensions;
+    BlockOptions blocks;
 };
 
 /// Checks every option of a run before any long computation. Throws dsreg::Error naming the flag.
@@ -170,6 +214,7 @@ struct PipelineResult {
     std::int64_t faces_against_field = 0;
     nlohmann::json extension_report;  ///< "metric", "local_weights", and "clamp" with --clamp
     std::vector<std::pair<std::string, double>> stage_seconds;  ///< wall time of each stage, in order
+    std::optional<BlockLayout> block_layout;  ///< the blocks of a block-wise run (streaming or MPI)
 };
 
 /// Surface, normals and regularization of `loaded` (stages "surface", "normals", "at",
@@ -196,6 +241,7 @@ struct PipelineOutputs {
     std::string normals;       ///< --export-normals: the field u in the --normals-file format
     std::string features;      ///< --features: AT feature lines as OBJ polylines
     std::string report;        ///< --report: JSON
+    std::string fragments;     ///< --fragments DIR: one mesh per block and manifest.json (block-wise runs)
     bool triangulate = false;  ///< --triangulate
 };
 

@@ -2,10 +2,12 @@
 #include "dsreg/pipeline.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <numeric>
 #include <sstream>
 
 #include "dsreg/atomic_file.hpp"
+#include "dsreg/block_pipeline.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
 #include "dsreg/mesh_io.hpp"
@@ -61,7 +63,7 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
     apply_regularization_extensions(o.extensions, result.surface, result.field.normals, result.weights);
     SolverOptions solver;
     solver.kind = o.solver;
-    solver.max_error_voxels = kDefaultMaxErrorVoxels;  // iterative solvers: within 5e-5 voxel of the exact answer
+    solver.max_error_voxels = o.max_error_voxels;  // iterative solvers: within this of the exact answer
     result.regularization = run_regularization(o.extensions, loaded.volume, result.surface, result.field.normals,
                                                result.weights, solver, result.extension_report);
     clock.finish(result.regularization.solve.solver + ", relative residual " +
@@ -90,6 +92,8 @@ nlohmann::json optional_json(const std::optional<double>& value) {
 void check_pipeline_options(const PipelineOptions& o, bool input_is_shape) {
     check_normal_field_options(o.normals, input_is_shape);
     check_weight_flags(o);
+    if (!(o.max_error_voxels > 0) || !std::isfinite(o.max_error_voxels))
+        throw Error("--max-error " + format("%g", o.max_error_voxels) + ": must be positive and finite (voxels)");
     check_regularization_extensions(o.extensions);
 }
 
@@ -100,6 +104,7 @@ PipelineResult run_pipeline(const LoadedVolume& loaded, const PipelineOptions& o
 }
 
 PipelineResult run_pipeline(const VolumeSource& source, const PipelineOptions& options, const ProgressCallback& progress) {
+    if (options.blocks.enabled()) return run_streaming_pipeline(source, options, progress);
     if (!source.max_memory.empty()) parse_memory_size("--max-memory", source.max_memory);
     check_pipeline_options(options, !source.shape.empty());
     StageClock clock(progress);
@@ -136,6 +141,8 @@ void check_pipeline_outputs(const PipelineOutputs& o) {
             throw Error("--features " + o.features + ": the feature lines are written as OBJ polylines (use .obj)");
         check_output_folder("--features", o.features);
     }
+    if (!o.fragments.empty() && std::filesystem::exists(o.fragments) && !std::filesystem::is_directory(o.fragments))
+        throw Error("--fragments " + o.fragments + ": exists and is not a folder");
     check_distinct_outputs({{"-o", o.mesh},
                             {"--input-mesh", o.input_mesh},
                             {"--report", o.report},
@@ -152,6 +159,10 @@ void write_pipeline_outputs(PipelineResult& result, const PipelineOptions& optio
     if (!outputs.normals.empty())
         write_normals_file(outputs.normals, result.surface, result.field.normals, result.field.description);
     write_feature_lines(outputs.features, options.normals, result.field, result.surface, result.regularization.positions);
+    if (!outputs.fragments.empty()) {
+        if (!result.block_layout) throw Error("--fragments needs a block-wise run (--block-size, or dsreg-mpi)");
+        write_block_fragments(outputs.fragments, result, *result.block_layout);
+    }
     clock.finish(outputs.mesh);
     result.stage_seconds.push_back(clock.stage_seconds().back());
     if (outputs.report.empty()) return;
@@ -185,7 +196,8 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
                             {"radius", optional_json(field.radius)},
                             {"ii_kernel", field.ii_kernel ? nlohmann::json(*field.ii_kernel) : nlohmann::json(nullptr)},
                             {"ii_extrapolated", field.ii_extrapolated},
-                            {"solver", solve.solver}, {"triangulate", outputs.triangulate}};
+                            {"solver", solve.solver}, {"max_error_voxels", o.max_error_voxels},
+                            {"triangulate", outputs.triangulate}};
     if (field.at) report["at"] = at_report(o.normals, field, surface);
     report["solve"] = {{"relative_residual", solve.relative_residual},
                        {"error_bound", solve.error_bound},
@@ -206,7 +218,7 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
     report["total_seconds"] = total_seconds(r);
     report["peak_memory_bytes"] = peak_memory_bytes();
     report["outputs"] = {{"mesh", outputs.mesh}, {"input_mesh", outputs.input_mesh},
-                         {"normals", outputs.normals}, {"features", outputs.features}};
+                         {"normals", outputs.normals}, {"features", outputs.features}, {"fragments", outputs.fragments}};
     report.update(r.extension_report);
     return report;
 }

@@ -96,7 +96,8 @@ namespace {
 
 std::string format_number(double x) { return format("%g", x); }
 
-LoadedVolume digitize_shape(const VolumeSource& o) {
+/// A --shape source without its voxels: shape, grid step, grid, description (--max-voxels checked).
+LoadedVolume shape_header(const VolumeSource& o) {
     LoadedVolume loaded;
     if (o.h && (!(*o.h > 0) || !std::isfinite(*o.h))) throw Error("--h must be positive (got " + format_number(*o.h) + ")");
     loaded.shape = make_shape(o.shape, o.box);
@@ -105,26 +106,44 @@ LoadedVolume digitize_shape(const VolumeSource& o) {
     if (cells.prod() > double(o.max_voxels))
         throw Error("--shape " + o.shape + " at --h " + format_number(loaded.h) + " needs about " +
                     format_number(cells.prod()) + " voxels, more than --max-voxels " + std::to_string(o.max_voxels));
+    loaded.description = o.shape + " at h=" + format_number(loaded.h);
+    return loaded;
+}
+
+LoadedVolume digitize_shape(const VolumeSource& o) {
+    LoadedVolume loaded = shape_header(o);
+    const Eigen::Vector3d cells = (loaded.shape->upper - loaded.shape->lower) / loaded.h + Eigen::Vector3d::Constant(3);
     const std::int64_t memory_cap = memory_voxel_cap(o);
     if (cells.prod() > double(memory_cap))
         throw Error("--shape " + o.shape + " at --h " + format_number(loaded.h) + " needs about " +
                     format_number(cells.prod()) + " voxels, more than --max-memory " + o.max_memory + " leaves room for (" +
                     std::to_string(memory_cap) + " voxels)");
     loaded.volume = digitize(*loaded.shape, loaded.h);
-    loaded.description = o.shape + " at h=" + format_number(loaded.h);
     return loaded;
 }
 
-LoadedVolume read_file(const VolumeSource& o) {
+ValueRange value_range(const VolumeSource& o) {
     ValueRange range;
     if (o.min_value) range.has_min = true, range.min = *o.min_value;
     if (o.max_value) range.has_max = true, range.max = *o.max_value;
+    return range;
+}
+
+/// --spacing, checked, on a grid read from a file.
+void apply_spacing(const VolumeSource& o, VoxelGrid& grid) {
+    if (!o.spacing) return;
+    if (!(o.spacing->array() > 0).all() || !o.spacing->allFinite())
+        throw Error("--spacing: every voxel size must be positive and finite");
+    grid.spacing = *o.spacing;
+}
+
+LoadedVolume read_file(const VolumeSource& o) {
     VolumeLimits limits;
     limits.max_voxels = memory_voxel_cap(o);
     const bool memory_bound = limits.max_voxels < o.max_voxels;
     LoadedVolume loaded;
     try {
-        loaded.volume = read_volume(o.input_path, range, o.raw_layout ? &*o.raw_layout : nullptr, limits);
+        loaded.volume = read_volume(o.input_path, value_range(o), o.raw_layout ? &*o.raw_layout : nullptr, limits);
     } catch (const Error& error) {
         const std::string message = error.what();
         if (memory_bound && message.find("exceed the limit of") != std::string::npos)
@@ -132,11 +151,7 @@ LoadedVolume read_file(const VolumeSource& o) {
         throw;
     }
     loaded.description = o.input_path;
-    if (o.spacing) {
-        if (!(o.spacing->array() > 0).all() || !o.spacing->allFinite())
-            throw Error("--spacing: every voxel size must be positive and finite");
-        loaded.volume.grid.spacing = *o.spacing;
-    }
+    apply_spacing(o, loaded.volume.grid);
     loaded.h = loaded.volume.grid.spacing.maxCoeff();
     return loaded;
 }
@@ -167,18 +182,57 @@ std::string file_value_range(const VolumeSource& o) {
 
 }  // namespace
 
-LoadedVolume load_volume(const VolumeSource& o) {
+namespace {
+
+void check_source(const VolumeSource& o) {
     if (o.input_path.empty() == o.shape.empty())
         throw Error(o.shape.empty() ? "no input: give a volume file or --shape NAME" : "give either a volume file or --shape, not both");
     if (o.max_voxels <= 0) throw Error("--max-voxels must be positive (got " + std::to_string(o.max_voxels) + ")");
+}
+
+}  // namespace
+
+Error empty_object_error(const VolumeSource& o, bool read_value_range) {
+    if (!o.shape.empty()) return Error(o.shape + ": the object is empty");
+    const std::string values = read_value_range ? file_value_range(o) : "";
+    return Error(o.input_path + ": the object is empty: no voxel has " + object_value_range(o) +
+                 (values.empty() ? "" : "; " + values) + " (choose the object's values with --min and --max)");
+}
+
+LoadedVolume load_volume(const VolumeSource& o) {
+    check_source(o);
     if (!o.shape.empty()) return digitize_shape(o);
     LoadedVolume loaded = read_file(o);
-    if (loaded.volume.object_voxel_count() == 0) {
-        const std::string values = file_value_range(o);
-        throw Error(o.input_path + ": the object is empty: no voxel has " + object_value_range(o) +
-                    (values.empty() ? "" : "; " + values) + " (choose the object's values with --min and --max)");
-    }
+    if (loaded.volume.object_voxel_count() == 0) throw empty_object_error(o, true);
     return loaded;
+}
+
+LoadedVolume probe_volume(const VolumeSource& o) {
+    check_source(o);
+    if (!o.shape.empty()) {
+        LoadedVolume loaded = shape_header(o);
+        loaded.volume.grid = digitization_grid(*loaded.shape, loaded.h);
+        return loaded;
+    }
+    VolumeLimits limits;
+    limits.max_voxels = o.max_voxels;
+    LoadedVolume loaded;
+    loaded.volume.grid.dims = read_volume_dims(o.input_path, o.raw_layout ? &*o.raw_layout : nullptr, limits);
+    loaded.description = o.input_path;
+    apply_spacing(o, loaded.volume.grid);
+    loaded.h = loaded.volume.grid.spacing.maxCoeff();
+    return loaded;
+}
+
+BinaryVolume load_volume_box(const VolumeSource& o, const LoadedVolume& header, const VoxelBox& box) {
+    if (header.shape) return digitize_box(*header.shape, header.h, box);
+    VolumeLimits limits;
+    limits.max_voxels = o.max_voxels;
+    BinaryVolume volume = read_volume_box(o.input_path, box, value_range(o), o.raw_layout ? &*o.raw_layout : nullptr, limits);
+    const VoxelGrid& grid = header.volume.grid;
+    volume.grid.spacing = grid.spacing;
+    volume.grid.origin = grid.voxel_center(box.lo[0], box.lo[1], box.lo[2]);
+    return volume;
 }
 
 }  // namespace dsreg

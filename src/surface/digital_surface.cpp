@@ -220,6 +220,12 @@ void build_vertices(DigitalSurface& surface, const std::vector<std::int8_t>& adj
     }
 }
 
+}  // namespace
+
+std::array<std::int64_t, 3> surfel_corner_pointel(const Surfel& s, int corner) {
+    return corner_pointels(s)[std::size_t(corner)];
+}
+
 void label_components(DigitalSurface& surface) {
     const std::int64_t m = surface.face_count();
     UnionFind faces(static_cast<std::size_t>(m));
@@ -249,8 +255,6 @@ std::int64_t count_split_pointels(const DigitalSurface& surface) {
         if (keys[i] == keys[i - 1] && (i == 1 || keys[i - 1] != keys[i - 2])) ++split;
     return split;
 }
-
-}  // namespace
 
 DigitalSurface extract_digital_surface(const BinaryVolume& volume, Connectivity connectivity) {
     const VoxelGrid& g = volume.grid;

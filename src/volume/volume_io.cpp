@@ -119,9 +119,29 @@ VoxelDestination VoxelDestination::mask(const ValueRange& range) { return VoxelD
 
 VoxelDestination VoxelDestination::values() { return VoxelDestination(true, ValueRange{}); }
 
-void VoxelDestination::allocate(const std::string& path, const Index3& dims) {
+VoxelDestination VoxelDestination::header_only() {
+    VoxelDestination destination(false, ValueRange{});
+    destination.header_only_ = true;
+    return destination;
+}
+
+void VoxelDestination::restrict_to(const VoxelBox& box) {
+    has_region_ = true;
+    region_.box = box;
+}
+
+bool VoxelDestination::allocate(const std::string& path, const Index3& dims) {
+    dims_ = dims;
     grid_ = VoxelGrid{};
     grid_.dims = dims;
+    if (header_only_) return false;
+    if (has_region_) {
+        region_.dims = dims;
+        if (region_.box.empty() || !VoxelBox{{0, 0, 0}, dims}.contains(region_.box))
+            fail(path, "the box of voxels " + format_dims(region_.box.lo) + " to " + format_dims(region_.box.hi) +
+                           " (excluded) is not inside the " + format_dims(dims) + " grid");
+        grid_.dims = region_.box.size();
+    }
     const auto count = static_cast<std::size_t>(grid_.voxel_count());
     try {
         if (keep_values_)
@@ -130,13 +150,15 @@ void VoxelDestination::allocate(const std::string& path, const Index3& dims) {
             mask_.assign(count, 0);
     } catch (const std::bad_alloc&) {
         const std::string bytes = std::to_string(grid_.voxel_count() * (keep_values_ ? 4 : 1));
-        fail(path, "not enough memory for a " + format_dims(dims) + (keep_values_ ? " volume of values (" : " mask (") + bytes +
-                       " bytes)");
+        fail(path, "not enough memory for a " + format_dims(grid_.dims) + (keep_values_ ? " volume of values (" : " mask (") +
+                       bytes + " bytes)");
     }
+    return true;
 }
 
 SampleWriter VoxelDestination::writer(const std::string& path, SampleFormat format) {
-    return keep_values_ ? SampleWriter(path, format, values_) : SampleWriter(path, format, range_, mask_);
+    const StreamRegion* region = has_region_ ? &region_ : nullptr;
+    return keep_values_ ? SampleWriter(path, format, values_, region) : SampleWriter(path, format, range_, mask_, region);
 }
 
 BinaryVolume VoxelDestination::take_mask() {
@@ -202,8 +224,21 @@ void InputFile::skip(std::uint64_t count) {
 // ----------------------------------------------------------------------------------------------
 // SampleWriter
 
-SampleWriter::SampleWriter(const std::string& path, SampleFormat format, std::uint64_t size)
+std::int64_t StreamRegion::local_index(std::uint64_t index) const {
+    const auto linear = static_cast<std::int64_t>(index);
+    const std::int64_t i = linear % dims[0], j = (linear / dims[0]) % dims[1], k = linear / (dims[0] * dims[1]);
+    if (!box.contains(i, j, k)) return -1;
+    const Index3 size = box.size();
+    return (i - box.lo[0]) + size[0] * ((j - box.lo[1]) + size[1] * (k - box.lo[2]));
+}
+
+SampleWriter::SampleWriter(const std::string& path, SampleFormat format, std::uint64_t size, const StreamRegion* region)
     : path_(path), format_(format), size_(size) {
+    if (region != nullptr) {
+        has_region_ = true;
+        region_ = *region;
+        size_ = static_cast<std::uint64_t>(region->dims[0] * region->dims[1] * region->dims[2]);
+    }
     if (format_.bytes == 1) {
         use_byte_table_ = true;
         for (int byte = 0; byte < 256; ++byte) {
@@ -213,16 +248,22 @@ SampleWriter::SampleWriter(const std::string& path, SampleFormat format, std::ui
     }
 }
 
-SampleWriter::SampleWriter(const std::string& path, SampleFormat format, const ValueRange& range, std::vector<std::uint8_t>& mask)
-    : SampleWriter(path, format, mask.size()) {
+SampleWriter::SampleWriter(const std::string& path, SampleFormat format, const ValueRange& range, std::vector<std::uint8_t>& mask,
+                           const StreamRegion* region)
+    : SampleWriter(path, format, mask.size(), region) {
     range_ = range;
     mask_ = mask.data();
     for (int byte = 0; byte < 256; ++byte) mask_table_[byte] = range_.contains(byte_table_[byte]) ? 1 : 0;
 }
 
-SampleWriter::SampleWriter(const std::string& path, SampleFormat format, std::vector<float>& values)
-    : SampleWriter(path, format, values.size()) {
+SampleWriter::SampleWriter(const std::string& path, SampleFormat format, std::vector<float>& values, const StreamRegion* region)
+    : SampleWriter(path, format, values.size(), region) {
     values_ = values.data();
+}
+
+void SampleWriter::skip_to(std::uint64_t index) {
+    if (index < written_ || index > size_ || pending_size_ != 0) fail(path_, "internal error: payload read out of order");
+    written_ = index;
 }
 
 void SampleWriter::reject_values_above(double max_value, const std::string& limit_name) {
@@ -233,8 +274,14 @@ void SampleWriter::reject_values_above(double max_value, const std::string& limi
 
 void SampleWriter::emit(const std::uint8_t* sample) {
     if (written_ >= size_) fail(path_, "payload holds more values than the " + std::to_string(size_) + " voxels announced");
+    std::int64_t slot = static_cast<std::int64_t>(written_);
+    if (has_region_ && (slot = region_.local_index(written_)) < 0) {
+        ++written_;  // outside the box (values there are not checked)
+        return;
+    }
     if (use_byte_table_ && mask_ != nullptr && !has_max_) {  // the common case of .vol files: one lookup
-        mask_[written_++] = mask_table_[*sample];
+        mask_[slot] = mask_table_[*sample];
+        ++written_;
         return;
     }
     const double value = use_byte_table_ ? byte_table_[*sample] : decode_sample(sample, format_);
@@ -242,9 +289,10 @@ void SampleWriter::emit(const std::uint8_t* sample) {
         fail(path_, "value " + format_value(value) + " of voxel #" + std::to_string(written_) + " exceeds " + max_name_ + " " +
                         format_value(max_value_));
     if (mask_ != nullptr)
-        mask_[written_++] = range_.contains(value) ? 1 : 0;
+        mask_[slot] = range_.contains(value) ? 1 : 0;
     else
-        values_[written_++] = static_cast<float>(value);
+        values_[slot] = static_cast<float>(value);
+    ++written_;
 }
 
 void SampleWriter::consume(const std::uint8_t* data, std::size_t count) {
@@ -291,7 +339,32 @@ void require_exact_payload(const InputFile& file, std::uint64_t expected_bytes, 
         file.fail(std::to_string(available - expected_bytes) + " trailing bytes after the payload: " + description + ", " + holds);
 }
 
+namespace {
+
+/// The rows of the region's box, each read at its offset in the payload that starts here.
+void decode_stored_rows(InputFile& file, SampleWriter& sink, const StreamRegion& region) {
+    const std::uint64_t start = file.position();
+    const auto bytes = static_cast<std::uint64_t>(sink.sample_bytes());
+    const Index3& d = region.dims;
+    const VoxelBox& box = region.box;
+    const Index3 size = box.size();
+    std::vector<std::uint8_t> row(std::size_t(size[0]) * bytes);
+    for (std::int64_t k = box.lo[2]; k < box.hi[2]; ++k)
+        for (std::int64_t j = box.lo[1]; j < box.hi[1]; ++j) {
+            const auto first = static_cast<std::uint64_t>(box.lo[0] + d[0] * (j + d[1] * k));
+            file.skip(start + first * bytes - file.position());
+            if (file.read(row.data(), row.size()) != row.size())
+                file.fail("truncated payload: the file could not be read at offset " + std::to_string(start + first * bytes));
+            sink.skip_to(first);
+            sink.consume(row.data(), row.size());
+        }
+    sink.skip_to(static_cast<std::uint64_t>(d[0] * d[1] * d[2]));
+}
+
+}  // namespace
+
 void decode_stored_payload(InputFile& file, SampleWriter& sink) {
+    if (const StreamRegion* region = sink.region()) return decode_stored_rows(file, sink, *region);
     std::vector<std::uint8_t> chunk(std::size_t(1) << 20);
     while (!sink.complete()) {
         const std::size_t got = file.read(chunk.data(), chunk.size());
@@ -339,6 +412,20 @@ void read_volume_voxels(const std::string& path, const RawVolumeLayout* raw_layo
 BinaryVolume read_volume(const std::string& path, const ValueRange& range, const RawVolumeLayout* raw_layout,
                          const VolumeLimits& limits) {
     auto destination = volume_io_detail::VoxelDestination::mask(range);
+    volume_io_detail::read_volume_voxels(path, raw_layout, limits, destination);
+    return destination.take_mask();
+}
+
+Index3 read_volume_dims(const std::string& path, const RawVolumeLayout* raw_layout, const VolumeLimits& limits) {
+    auto destination = volume_io_detail::VoxelDestination::header_only();
+    volume_io_detail::read_volume_voxels(path, raw_layout, limits, destination);
+    return destination.dims();
+}
+
+BinaryVolume read_volume_box(const std::string& path, const VoxelBox& box, const ValueRange& range,
+                             const RawVolumeLayout* raw_layout, const VolumeLimits& limits) {
+    auto destination = volume_io_detail::VoxelDestination::mask(range);
+    destination.restrict_to(box);
     volume_io_detail::read_volume_voxels(path, raw_layout, limits, destination);
     return destination.take_mask();
 }

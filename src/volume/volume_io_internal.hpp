@@ -77,27 +77,47 @@ struct SampleFormat {
     bool big_endian = false;
 };
 
+/// Where a stream of voxels goes when only a box of the grid is kept: voxel (i,j,k) of the stream
+/// (x fastest over `dims`) is stored at the box's own linear index if it lies in `box`, and
+/// dropped otherwise.
+struct StreamRegion {
+    Index3 dims{0, 0, 0};
+    VoxelBox box;
+
+    /// Index in the box's storage of stream voxel `index`, or −1 outside the box.
+    std::int64_t local_index(std::uint64_t index) const;
+};
+
 /// Decodes a stream of encoded samples, in voxel order, into either mask bytes (1 = value in
 /// `range`) or float values. Bytes may arrive in chunks of any size: a sample split between
 /// chunks is completed by the next call. Optionally rejects values above a maximum (PGM's
-/// maxval). The destination vector must already have one element per voxel.
+/// maxval). The destination vector must already have one element per voxel (per voxel of the
+/// box, with a region).
 class SampleWriter {
 public:
     /// Thresholding: mask[i] = range.contains(value of voxel i).
-    SampleWriter(const std::string& path, SampleFormat format, const ValueRange& range, std::vector<std::uint8_t>& mask);
+    SampleWriter(const std::string& path, SampleFormat format, const ValueRange& range, std::vector<std::uint8_t>& mask,
+                 const StreamRegion* region = nullptr);
     /// Values: values[i] = value of voxel i, rounded to float.
-    SampleWriter(const std::string& path, SampleFormat format, std::vector<float>& values);
+    SampleWriter(const std::string& path, SampleFormat format, std::vector<float>& values,
+                 const StreamRegion* region = nullptr);
 
     /// Values above `max_value` make consume() throw (naming the file and the voxel).
     void reject_values_above(double max_value, const std::string& limit_name);
 
     void consume(const std::uint8_t* data, std::size_t count);
 
+    /// With a region: the next sample consumed is that of stream voxel `index` (≥ the current
+    /// one); the voxels skipped are outside the box. For payloads read by offsets.
+    void skip_to(std::uint64_t index);
+    const StreamRegion* region() const { return has_region_ ? &region_ : nullptr; }
+    int sample_bytes() const { return format_.bytes; }
+
     std::uint64_t samples_written() const { return written_; }
     bool complete() const { return written_ == size_ && pending_size_ == 0; }
 
 private:
-    SampleWriter(const std::string& path, SampleFormat format, std::uint64_t size);
+    SampleWriter(const std::string& path, SampleFormat format, std::uint64_t size, const StreamRegion* region);
     void emit(const std::uint8_t* sample);
 
     std::string path_;
@@ -105,7 +125,9 @@ private:
     ValueRange range_;
     std::uint8_t* mask_ = nullptr;  ///< exactly one of mask_ / values_ is set
     float* values_ = nullptr;
-    std::uint64_t size_ = 0;
+    std::uint64_t size_ = 0;        ///< voxels of the stream
+    bool has_region_ = false;
+    StreamRegion region_;
     bool use_byte_table_ = false;
     double byte_table_[256] = {};        ///< decoded value of each byte, for 1-byte samples
     std::uint8_t mask_table_[256] = {};  ///< its mask value (thresholding, 1-byte samples)
@@ -121,23 +143,35 @@ private:
 using MaskWriter = SampleWriter;
 
 /// What a reader produces: a mask thresholded by a ValueRange (read_volume) or the values
-/// themselves as floats (read_volume_values). Readers call allocate() once the header is
-/// checked, then feed it through writer() (binary payloads) or set() (ASCII payloads).
+/// themselves as floats (read_volume_values), of the whole grid or of a box of it, or only the
+/// dimensions (header_only). Readers call allocate() once the header is checked and, if it
+/// returns true, feed the payload through writer() (binary payloads) or set() (ASCII payloads).
 class VoxelDestination {
 public:
     static VoxelDestination mask(const ValueRange& range);
     static VoxelDestination values();
+    /// Records the dimensions; allocate() returns false, so that no payload is read.
+    static VoxelDestination header_only();
 
-    /// Storage for `dims` voxels (spacing 1, origin 0). Throws dsreg::Error naming `path` if
-    /// the memory cannot be allocated.
-    void allocate(const std::string& path, const Index3& dims);
-    std::uint64_t size() const { return static_cast<std::uint64_t>(grid_.voxel_count()); }
-    /// Stores the value of voxel `index` (thresholded or rounded to float).
+    /// Keeps only the voxels of `box` (call before allocate(), which checks that the box lies
+    /// in the grid).
+    void restrict_to(const VoxelBox& box);
+
+    /// Storage for `dims` voxels (spacing 1, origin 0), or for the box. Throws dsreg::Error
+    /// naming `path` if the memory cannot be allocated or the box is not inside the grid.
+    /// Returns whether the payload is wanted (false for header_only).
+    bool allocate(const std::string& path, const Index3& dims);
+    /// Voxels of the stream (the whole grid).
+    std::uint64_t size() const { return static_cast<std::uint64_t>(dims_[0] * dims_[1] * dims_[2]); }
+    const Index3& dims() const { return dims_; }
+    /// Stores the value of voxel `index` of the grid (thresholded or rounded to float), if kept.
     void set(std::uint64_t index, double value) {
+        std::int64_t slot = static_cast<std::int64_t>(index);
+        if (has_region_ && (slot = region_.local_index(index)) < 0) return;
         if (keep_values_)
-            values_[index] = static_cast<float>(value);
+            values_[std::size_t(slot)] = static_cast<float>(value);
         else
-            mask_[index] = range_.contains(value) ? 1 : 0;
+            mask_[std::size_t(slot)] = range_.contains(value) ? 1 : 0;
     }
     /// A decoder of encoded samples into this destination.
     SampleWriter writer(const std::string& path, SampleFormat format);
@@ -149,8 +183,12 @@ private:
     VoxelDestination(bool keep_values, const ValueRange& range) : keep_values_(keep_values), range_(range) {}
 
     bool keep_values_;
+    bool header_only_ = false;
     ValueRange range_;
-    VoxelGrid grid_;
+    Index3 dims_{0, 0, 0};  ///< of the whole grid
+    bool has_region_ = false;
+    StreamRegion region_;
+    VoxelGrid grid_;        ///< of what is kept
     std::vector<std::uint8_t> mask_;
     std::vector<float> values_;
 };
@@ -178,7 +216,8 @@ void require_exact_payload(const InputFile& file, std::uint64_t expected_bytes, 
 /// maximum compression ratio (1032:1): a lying header must not make us allocate.
 void require_plausible_zlib_payload(const InputFile& file, std::uint64_t expected_bytes, const std::string& description);
 
-/// Feeds the rest of the file (exactly the expected size, already checked) to `sink`.
+/// Feeds the rest of the file (exactly the expected size, already checked) to `sink`; with a
+/// region, only the rows of its box, each read at its offset.
 void decode_stored_payload(InputFile& file, SampleWriter& sink);
 
 /// Inflates the zlib stream filling the rest of the file into `sink`, with a hard cap at
