@@ -9,6 +9,7 @@
 #include "eval_command.hpp"
 #include "regularize_command.hpp"
 #include "regularize_flags.hpp"
+#include "view_command.hpp"
 
 int main(int argc, char** argv) {
     dsreg::cli::restart_with_passive_openmp_waiting(argv);
@@ -20,6 +21,7 @@ int main(int argc, char** argv) {
     dsreg::cli::add_eval_command(app);
     dsreg::cli::add_convergence_command(app);
     dsreg::cli::add_digitize_command(app);
+    dsreg::cli::add_view_command(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -180,6 +180,9 @@ void add_regularize_flags(CLI::App& cmd, RegularizeFlags& flags) {
     cmd.add_flag("--triangulate", flags.outputs.triangulate, "Split each quad along its shorter diagonal");
     cmd.add_option("--input-mesh", flags.outputs.input_mesh, "Also write the unregularized digital surface to this file");
     cmd.add_option("--report", flags.outputs.report, "Write counts, timings, energies and parameters as JSON");
+    cmd.add_option("--html", flags.outputs.html,
+                   "Write a self-contained HTML page showing the result in 3D: the surface, the digital surface, "
+                   "colours by deviation from u, displacement, feature map; the run's summary (docs/viewer.md)");
     cmd.add_flag("-q,--quiet", flags.quiet, "Print nothing but errors");
     cmd.add_flag("-v,--verbose", flags.verbose, "Print each stage as it finishes");
 }

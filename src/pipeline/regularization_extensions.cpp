@@ -68,10 +68,6 @@ nlohmann::json local_weights_json(const RegularizationExtensions& o, const Regul
     return json;
 }
 
-nlohmann::json energy_json(const EnergyTerms& e, const RegularizationWeights& w) {
-    return {{"data", e.data}, {"alignment", e.alignment}, {"fairness", e.fairness}, {"total", e.total(w)}};
-}
-
 nlohmann::json clamp_json(const RegularizationExtensions& o, const ClampedRegularizationResult& r, const RegularizationWeights& w,
                           const VoxelAgreement& clamped, const VoxelAgreement& unclamped) {
     const BoxQpReport& q = r.clamp.qp;
@@ -107,6 +103,10 @@ nlohmann::json clamp_json(const RegularizationExtensions& o, const ClampedRegula
 }
 
 }  // namespace
+
+nlohmann::json energy_json(const EnergyTerms& e, const RegularizationWeights& w) {
+    return {{"data", e.data}, {"alignment", e.alignment}, {"fairness", e.fairness}, {"total", e.total(w)}};
+}
 
 void check_regularization_extensions(const RegularizationExtensions& o) {
     if (!(o.clamp_tolerance > 0) || !std::isfinite(o.clamp_tolerance)) throw Error("--clamp-tolerance must be positive");
