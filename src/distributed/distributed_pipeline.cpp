@@ -206,7 +206,13 @@ PipelineResult run_distributed_pipeline(MPI_Comm comm, const VolumeSource& sourc
     const double eigenvalue = smallest_eigenvalue_bound(comm, block);
     const distributed::VertexNumbering numbering = distributed::number_vertices(comm, block.patch, layout);
     const double max_error = options.max_error_voxels * plan.header.volume.grid.spacing.minCoeff();
-    distributed::PetscSolution solution = distributed::solve_with_petsc(comm, block, numbering, max_error, eigenvalue);
+    // What rank 0 needs of the block (positions filled after the solve), before the solve frees it.
+    BlockPiece piece;
+    run_collectively(comm, [&] { piece = patch_piece(block.patch, block.patch.surface.vertices, block.field.normals); });
+    NormalField field = std::move(block.field);
+    field.normals = PointMatrix();
+    distributed::PetscSolution solution = distributed::solve_with_petsc(comm, std::move(block), numbering, max_error, eigenvalue);
+    piece.positions = std::move(solution.owned_positions);
     figures.petsc_assembly = solution.assembly_seconds;
     figures.solve = solution.solve_seconds;
     stage_seconds.emplace_back("regularize", max_over_ranks(comm, figures.assembly + figures.petsc_assembly + figures.solve));
@@ -214,16 +220,6 @@ PipelineResult run_distributed_pipeline(MPI_Comm comm, const VolumeSource& sourc
                  solution.report.solver + ", " + std::to_string(solution.report.iterations) + " iterations, error bound " +
                      format("%.2e", solution.report.error_bound / plan.header.volume.grid.spacing.minCoeff()) + " voxel");
 
-    // Keep only what rank 0 needs, then free the block before the gather.
-    BlockPiece piece;
-    run_collectively(comm, [&] {
-        piece = patch_piece(block.patch, Eigen::Map<const PointMatrix>(solution.x.data(), solution.x.size() / 3, 3),
-                            block.field.normals);
-    });
-    NormalField field = std::move(block.field);
-    field.normals = PointMatrix();
-    block = BlockStages();
-    solution.x = Eigen::VectorXd();
     std::vector<BlockPiece> pieces = gather_pieces(comm, piece);
     piece = BlockPiece();
 

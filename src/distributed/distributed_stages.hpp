@@ -30,15 +30,16 @@ VertexNumbering number_vertices(MPI_Comm comm, const SurfacePatch& patch, const 
 
 struct PetscSolution {
     SolveReport report;
-    Eigen::VectorXd x;  ///< 3 entries per patch vertex: the solution at the owned ones, p elsewhere
+    PointMatrix owned_positions;  ///< the solution at the owned vertices, in their order
     double assembly_seconds = 0, solve_seconds = 0;
     std::int64_t matrix_nonzeros = 0;  ///< of the whole matrix
 };
 
 /// Assembles the owned rows of R into a PETSc matrix and solves R x = b with CG + algebraic
-/// multigrid until ‖R x − b‖₂ / smallest_eigenvalue ≤ max_error (or rounding level). Collective.
-PetscSolution solve_with_petsc(MPI_Comm comm, const BlockStages& block, const VertexNumbering& numbering,
-                               double max_error, double smallest_eigenvalue);
+/// multigrid until ‖R x − b‖₂ / smallest_eigenvalue ≤ max_error (or rounding level). Consumes
+/// the block (freed once PETSc holds its rows, before the multigrid setup). Collective.
+PetscSolution solve_with_petsc(MPI_Comm comm, BlockStages block, const VertexNumbering& numbering, double max_error,
+                               double smallest_eigenvalue);
 
 /// Ends the run: prints "dsreg-mpi: PETSc error in WHAT: MESSAGE" and calls MPI_Abort.
 [[noreturn]] void petsc_failure(MPI_Comm comm, const std::string& what, int code);

@@ -103,7 +103,9 @@ void write_block_fragments(const std::string& folder, const PipelineResult& resu
             local[std::size_t(used[i])] = -1;
         }
         mesh.vertex_scalars.emplace_back("key", key);
-        const std::string name = "block-" + format("%06lld", static_cast<long long>(block)) + ".ply";
+        std::string number = std::to_string(block);
+        number.insert(0, number.size() < 6 ? 6 - number.size() : 0, '0');
+        const std::string name = "block-" + number + ".ply";
         write_mesh((fs::path(folder) / name).string(), mesh);
         entry["vertices"] = used.size();
         entry["file"] = name;
