@@ -72,6 +72,11 @@ Index3 key_voxel_of_vertex(const Index3& dims, std::int64_t vertex_key);
 /// The pointel of a vertex key, in the grid's pointel coordinates.
 Index3 pointel_of_vertex_key(const Index3& dims, std::int64_t vertex_key);
 
+/// The key of every vertex of `surface`, whose voxel coordinates start at `offset` in a grid of
+/// `dims` voxels: the smallest 4·(surfel key) + corner over the vertex's corners (its key if its
+/// umbrella lies whole in `surface`, as for every vertex of a whole surface).
+std::vector<std::int64_t> vertex_keys_of(const DigitalSurface& surface, const Index3& offset, const Index3& dims);
+
 /// Margins of a patch around its box of row vertices (see above).
 constexpr std::int64_t kPatchFaceMargin = 2;
 constexpr std::int64_t kPatchVolumeMargin = 4;

@@ -26,21 +26,6 @@ std::vector<std::int32_t> faces_in(const DigitalSurface& local, const VoxelBox& 
     return kept;
 }
 
-/// The key of every vertex of `local` used by a kept face: the smallest 4·(surfel key) + corner
-/// over its umbrella (umbrellas of kept faces lie whole in the extraction box).
-std::vector<std::int64_t> local_vertex_keys(const DigitalSurface& local, const VoxelBox& box, const Index3& dims) {
-    std::vector<std::int64_t> keys(static_cast<std::size_t>(local.vertex_count()), std::numeric_limits<std::int64_t>::max());
-    for (std::int64_t f = 0; f < local.face_count(); ++f) {
-        const Surfel& s = local.surfels[std::size_t(f)];
-        const std::int64_t key = surfel_key(dims, plus({s.voxel[0], s.voxel[1], s.voxel[2]}, box.lo), s.axis, s.sign);
-        for (int k = 0; k < 4; ++k) {
-            std::int64_t& v = keys[std::size_t(local.quads(f, k))];
-            v = std::min(v, 4 * key + k);
-        }
-    }
-    return keys;
-}
-
 }  // namespace
 
 BinaryVolume crop_volume(const BinaryVolume& volume, const VoxelBox& volume_box, const VoxelBox& box) {
@@ -76,7 +61,7 @@ SurfacePatch extract_surface_patch(const BinaryVolume& volume, const VoxelBox& v
     if (sub.object_voxel_count() == 0) return patch;
     const DigitalSurface local = extract_digital_surface(sub, connectivity);
     const std::vector<std::int32_t> kept = faces_in(local, box, rows.grown(kPatchFaceMargin + surface_margin).clipped(grid.dims));
-    const std::vector<std::int64_t> local_keys = local_vertex_keys(local, box, grid.dims);
+    const std::vector<std::int64_t> local_keys = vertex_keys_of(local, box.lo, grid.dims);  // kept faces: whole umbrellas
 
     // Vertices of the kept faces, in key order.
     std::vector<std::int32_t> used;

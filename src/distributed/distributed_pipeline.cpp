@@ -98,13 +98,7 @@ std::int64_t sum_over_ranks(MPI_Comm comm, std::int64_t value) {
 
 /// α·min α_i w0_i over the owned vertices of every rank.
 double smallest_eigenvalue_bound(MPI_Comm comm, const BlockStages& block) {
-    double smallest = std::numeric_limits<double>::infinity();
-    const RegularizationWeights& w = block.weights;
-    for (std::int64_t j = 0; j < block.patch.vertex_count(); ++j) {
-        if (!block.patch.vertex_owned[std::size_t(j)]) continue;
-        const double a = w.vertex_alpha.size() ? w.vertex_alpha[j] : 1.0, w0 = w.vertex_weights.size() ? w.vertex_weights[j] : 1.0;
-        smallest = std::min(smallest, block.weights.alpha * a * w0);
-    }
+    const double smallest = dsreg::smallest_eigenvalue_bound(block.weights, block.patch.vertex_owned);
     double global = smallest;
     MPI_Allreduce(&smallest, &global, 1, MPI_DOUBLE, MPI_MIN, comm);
     return global;

@@ -15,8 +15,10 @@ namespace dsreg::distributed {
 
 [[noreturn]] void petsc_failure(MPI_Comm comm, const std::string& what, int code) {
     const char* text = nullptr;
-    PetscErrorMessage(PetscErrorCode(code), &text, nullptr);
-    std::fprintf(stderr, "dsreg-mpi: error: PETSc failed in %s: %s\n", what.c_str(), text ? text : "unknown error");
+    char* specific = nullptr;
+    PetscErrorMessage(PetscErrorCode(code), &text, &specific);
+    std::fprintf(stderr, "dsreg-mpi: error: PETSc failed in %s: %s%s%s\n", what.c_str(), text ? text : "error",
+                 specific ? ": " : "", specific ? specific : "");
     std::fflush(stderr);
     MPI_Abort(comm, 1);
     std::abort();
@@ -101,7 +103,9 @@ void default_multigrid_options(MPI_Comm comm) {
     default_option(comm, "-mg_levels_pc_type", "pbjacobi");
     default_option(comm, "-pc_gamg_square_graph", "0");
     default_option(comm, "-pc_gamg_agg_nsmooths", "0");
-    default_option(comm, "-matptap_via", "allatonce");
+    int size = 1;
+    MPI_Comm_size(comm, &size);
+    if (size > 1) default_option(comm, "-matptap_via", "allatonce");  // MPIAIJ only (SeqAIJ has no such product)
 }
 
 }  // namespace

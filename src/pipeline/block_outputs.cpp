@@ -15,20 +15,6 @@ namespace dsreg {
 
 namespace {
 
-/// The global key of every vertex of a whole surface (blocks.hpp): the smallest corner name.
-std::vector<std::int64_t> vertex_keys(const DigitalSurface& s) {
-    std::vector<std::int64_t> keys(static_cast<std::size_t>(s.vertex_count()), std::numeric_limits<std::int64_t>::max());
-    for (std::int64_t f = 0; f < s.face_count(); ++f) {
-        const Surfel& surfel = s.surfels[std::size_t(f)];
-        const std::int64_t key = surfel_key(s.grid.dims, {surfel.voxel[0], surfel.voxel[1], surfel.voxel[2]}, surfel.axis, surfel.sign);
-        for (int k = 0; k < 4; ++k) {
-            std::int64_t& v = keys[std::size_t(s.quads(f, k))];
-            v = std::min(v, 4 * key + k);
-        }
-    }
-    return keys;
-}
-
 nlohmann::json box_json(const VoxelBox& box) { return {{"lo", box.lo}, {"hi", box.hi}}; }
 
 }  // namespace
@@ -66,7 +52,7 @@ void write_block_fragments(const std::string& folder, const PipelineResult& resu
     fs::create_directories(folder, error);
     if (error) throw Error("--fragments " + folder + ": cannot create the folder: " + error.message());
     const DigitalSurface& s = result.surface;
-    const std::vector<std::int64_t> keys = vertex_keys(s);
+    const std::vector<std::int64_t> keys = vertex_keys_of(s, {0, 0, 0}, s.grid.dims);
     std::vector<std::vector<std::int32_t>> faces_of_block(static_cast<std::size_t>(layout.block_count()));
     for (std::int64_t f = 0; f < s.face_count(); ++f) {
         const auto& v = s.surfels[std::size_t(f)].voxel;

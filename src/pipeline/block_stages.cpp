@@ -181,14 +181,9 @@ SolveReport solve_patch_rows(const BlockStages& block, Eigen::VectorXd& x, const
     // columns of R_SS come out sorted).
     std::vector<std::int64_t> unknown(static_cast<std::size_t>(3 * n), -1);
     std::int64_t count = 0;
-    double smallest_weight = std::numeric_limits<double>::infinity();
-    for (std::int64_t i = 0; i < n; ++i) {
-        if (!patch.vertex_row[std::size_t(i)]) continue;
-        for (int d = 0; d < 3; ++d) unknown[std::size_t(3 * i + d)] = count++;
-        const double vertex_alpha = block.weights.vertex_alpha.size() ? block.weights.vertex_alpha[i] : 1.0;
-        const double w0 = block.weights.vertex_weights.size() ? block.weights.vertex_weights[i] : 1.0;
-        smallest_weight = std::min(smallest_weight, vertex_alpha * w0);
-    }
+    for (std::int64_t i = 0; i < n; ++i)
+        if (patch.vertex_row[std::size_t(i)])
+            for (int d = 0; d < 3; ++d) unknown[std::size_t(3 * i + d)] = count++;
     // R is symmetric: column c is row c. R_SS by columns; b_S − R_SO x_O.
     Eigen::SparseMatrix<double> reduced(count, count);
     Eigen::VectorXd rhs(count), guess(count);
@@ -212,7 +207,7 @@ SolveReport solve_patch_rows(const BlockStages& block, Eigen::VectorXd& x, const
     reduced.setFromTriplets(entries.begin(), entries.end());
     entries = {};
     SolverOptions options = solver;
-    options.smallest_eigenvalue = block.weights.alpha * smallest_weight;
+    options.smallest_eigenvalue = smallest_eigenvalue_bound(block.weights, patch.vertex_row);
     const SolveReport report = solve_spd(reduced, rhs, guess, options);
     for (std::int64_t c = 0; c < 3 * n; ++c)
         if (unknown[std::size_t(c)] >= 0) x[c] = guess[unknown[std::size_t(c)]];

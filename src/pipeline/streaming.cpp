@@ -88,13 +88,9 @@ struct BoundTally {
         const Eigen::VectorXd r = owned_residual(b, x);
         energy_norm_squared += owned_energy_norm_bound(b, r, solver);
         residual_squared += r.squaredNorm();
-        for (std::int64_t j = 0; j < b.patch.vertex_count(); ++j) {
-            if (!b.patch.vertex_owned[std::size_t(j)]) continue;
-            rhs_squared += b.system.rhs.segment<3>(3 * j).squaredNorm();
-            const double alpha_j = b.weights.vertex_alpha.size() ? b.weights.vertex_alpha[j] : 1.0;
-            const double w0_j = b.weights.vertex_weights.size() ? b.weights.vertex_weights[j] : 1.0;
-            smallest_eigenvalue = std::min(smallest_eigenvalue, b.weights.alpha * alpha_j * w0_j);
-        }
+        for (std::int64_t j = 0; j < b.patch.vertex_count(); ++j)
+            if (b.patch.vertex_owned[std::size_t(j)]) rhs_squared += b.system.rhs.segment<3>(3 * j).squaredNorm();
+        smallest_eigenvalue = std::min(smallest_eigenvalue, smallest_eigenvalue_bound(b.weights, b.patch.vertex_owned));
     }
     /// ‖x̃ − x*‖₂ ≤ ‖x̃ − x*‖_R / sqrt(λ_min(R)), λ_min(R) ≥ α min α_i w0_i (solvers.hpp).
     double error_bound() const { return std::sqrt(energy_norm_squared / smallest_eigenvalue); }
