@@ -374,6 +374,9 @@ TEST(Blocks, OptionsThatNeedTheWholeSurfaceAreRefused) {
     PipelineOptions maps = options;
     maps.extensions.alpha_file = "a.txt";
     EXPECT_THROW(run_pipeline(source, maps), Error);
+    VolumeSource limited = source;  // the --max-memory estimate is the whole-volume run's
+    limited.max_memory = "4G";
+    EXPECT_THROW(run_pipeline(limited, options), Error);
 }
 
 }  // namespace

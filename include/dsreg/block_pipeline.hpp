@@ -43,7 +43,8 @@ struct BlockPlan {
 };
 
 /// Checks the options of a block-wise run, refusing those that need the whole surface at once
-/// (--normals at, --normals-file, --clamp, local weight maps and files) with a dsreg::Error
+/// (--normals at, --normals-file, --clamp, local weight maps and files) and --max-memory (its
+/// estimate is the whole-volume run's) with a dsreg::Error
 /// naming the flag and `driver` (e.g. "--block-size" or "dsreg-mpi"); probes the volume; fixes the
 /// radius of the normal field to the whole-volume one.
 BlockPlan plan_block_run(const VolumeSource& source, const PipelineOptions& options, const std::string& driver);

@@ -119,6 +119,9 @@ double stage_time(const StageClock& clock, const std::string& name) {
 BlockPlan plan_block_run(const VolumeSource& source, const PipelineOptions& options, const std::string& driver) {
     check_pipeline_options(options, !source.shape.empty());
     refuse_global_options(options, driver);
+    if (!source.max_memory.empty())
+        throw Error("--max-memory cannot be used with " + driver +
+                    ": its estimate is that of the whole-volume run (choose the block size instead)");
     BlockPlan plan;
     plan.header = probe_volume(source);
     plan.reach = normal_field_reach(options.normals, plan.header);

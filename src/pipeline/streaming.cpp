@@ -125,6 +125,84 @@ std::int64_t default_block_halo(const PipelineOptions& o) {
     return std::int64_t(std::ceil(2.0 * std::sqrt(o.beta / o.alpha))) + kPatchFaceMargin;
 }
 
+namespace {
+
+/// What the passes over the blocks build up.
+struct StreamingState {
+    explicit StreamingState(const BlockLayout& layout) : store(layout), pieces(std::size_t(layout.block_count())) {}
+    VertexStore store;
+    std::vector<BlockPiece> pieces;  ///< owned faces of each block (positions filled at the end)
+    BlockTimes times;
+    WeldedRun run;
+    std::set<std::string> solvers;
+    std::int64_t blocks_with_surface = 0, largest_read = 0, largest_patch = 0;
+    int iterations = 0;
+    nlohmann::json passes = nlohmann::json::array();
+};
+
+/// Progress through `passes` passes over the blocks: pass `pass`, `done` of its `count` blocks.
+void report_pass(const ProgressCallback& progress, const std::string& name, int pass, int passes, std::int64_t done,
+                 std::int64_t count) {
+    report_progress(progress, "blocks", (pass + double(done) / double(count)) / passes,
+                    name + ", block " + std::to_string(done) + "/" + std::to_string(count));
+}
+
+/// One pass over the blocks: the first (free boundaries, sweep 0) or a Schwarz sweep.
+void solve_pass(const VolumeSource& source, const BlockPlan& plan, const BlockLayout& layout, std::int64_t halo, int sweep,
+                int passes, const SolverOptions& solver, StreamingState& state, const ProgressCallback& progress) {
+    double solve_seconds = 0;
+    int iterations = 0;
+    const std::string name = sweep == 0 ? "first pass" : "Schwarz sweep " + std::to_string(sweep);
+    for (std::int64_t block = 0; block < layout.block_count(); ++block) {
+        const VoxelBox owned = layout.box(block);
+        const BlockStages b = run_block_stages(source, plan, owned, owned.grown(halo).clipped(layout.dims));
+        state.times.add(b);
+        report_pass(progress, name, sweep, passes, block + 1, layout.block_count());
+        if (sweep == 0) state.run.object_voxels += b.owned_object_voxels;
+        if (!has_owned_faces(b.patch)) continue;
+        Eigen::VectorXd x = current_positions(b.patch, state.store);
+        const auto started = std::chrono::steady_clock::now();
+        const SolveReport solve = sweep == 0 ? solve_patch_free(b, x, solver) : solve_patch_rows(b, x, solver);
+        solve_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+        iterations += solve.iterations;
+        state.solvers.insert(solve.solver);
+        state.store.keep(block, b.patch, x);
+        if (sweep > 0) continue;
+        state.pieces[std::size_t(block)] = patch_piece(b.patch, b.patch.surface.vertices, b.field.normals);
+        ++state.blocks_with_surface;
+        state.largest_read = std::max(state.largest_read, b.read.voxel_count());
+        state.largest_patch = std::max(state.largest_patch, b.patch.face_count());
+        if (state.run.field.description.empty()) {
+            state.run.field = b.field;
+            state.run.field.normals = PointMatrix();
+        }
+    }
+    state.run.solve_seconds += solve_seconds;
+    state.iterations += iterations;
+    state.passes.push_back({{"kind", sweep == 0 ? "free boundaries" : "Schwarz sweep"},
+                            {"solve_seconds", solve_seconds},
+                            {"iterations", iterations}});
+}
+
+/// The bound pass: the residual rows at the welded vertices, block by block on blocks centred
+/// on the seams, where the residual is (inside a block, x̃ solves the block's equations), so that
+/// M_b keeps the couplings across each seam (no halo needed).
+BoundTally bound_pass(const VolumeSource& source, const BlockPlan& plan, const BlockLayout& layout, int passes,
+                      const SolverOptions& solver, StreamingState& state, const ProgressCallback& progress) {
+    BoundTally tally;
+    const BlockLayout staggered = staggered_blocks(layout);
+    for (std::int64_t block = 0; block < staggered.block_count(); ++block) {
+        const VoxelBox owned = staggered.box(block);
+        const BlockStages b = run_block_stages(source, plan, owned, owned);
+        state.times.add(b);
+        report_pass(progress, "error bound", passes - 1, passes, block + 1, staggered.block_count());
+        if (has_owned_faces(b.patch)) tally.add(b, current_positions(b.patch, state.store), solver);
+    }
+    return tally;
+}
+
+}  // namespace
+
 PipelineResult run_streaming_pipeline(const VolumeSource& source, const PipelineOptions& options,
                                       const ProgressCallback& progress) {
     const BlockOptions& bo = options.blocks;
@@ -140,109 +218,54 @@ PipelineResult run_streaming_pipeline(const VolumeSource& source, const Pipeline
     solver.kind = options.solver;
     solver.max_error = options.max_error_voxels * grid.spacing.minCoeff();
 
-    VertexStore store(layout);
-    std::vector<BlockPiece> pieces(std::size_t(layout.block_count()));
-    BlockTimes times;
-    WeldedRun run;
-    std::set<std::string> solvers;
-    std::int64_t blocks_with_surface = 0, largest_read = 0, largest_patch = 0;
-    int iterations = 0;
-    nlohmann::json passes = nlohmann::json::array();
-    const int sweep_count = 1 + bo.schwarz_sweeps;
-    const std::int64_t block_count = layout.block_count();
-    const auto report_block = [&](const std::string& pass, int index, std::int64_t block) {
-        report_progress(progress, "blocks", double(index * block_count + block + 1) / double((sweep_count + 1) * block_count),
-                        pass + ", block " + std::to_string(block + 1) + "/" + std::to_string(block_count));
-    };
-    // Pass 0 (free boundaries), then the Schwarz sweeps (held boundaries).
-    for (int sweep = 0; sweep < sweep_count; ++sweep) {
-        double solve_seconds = 0;
-        int pass_iterations = 0;
-        for (std::int64_t block = 0; block < block_count; ++block) {
-            const VoxelBox owned = layout.box(block);
-            const BlockStages b = run_block_stages(source, plan, owned, owned.grown(halo).clipped(grid.dims));
-            times.add(b);
-            report_block(sweep == 0 ? "first pass" : "sweep " + std::to_string(sweep), sweep, block);
-            if (sweep == 0) run.object_voxels += b.owned_object_voxels;
-            if (!has_owned_faces(b.patch)) continue;
-            Eigen::VectorXd x = current_positions(b.patch, store);
-            const auto started = std::chrono::steady_clock::now();
-            const SolveReport solve = sweep == 0 ? solve_patch_free(b, x, solver) : solve_patch_rows(b, x, solver);
-            solve_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-            pass_iterations += solve.iterations;
-            solvers.insert(solve.solver);
-            store.keep(block, b.patch, x);
-            if (sweep > 0) continue;
-            pieces[std::size_t(block)] = patch_piece(b.patch, b.patch.surface.vertices, b.field.normals);
-            ++blocks_with_surface;
-            largest_read = std::max(largest_read, b.read.voxel_count());
-            largest_patch = std::max(largest_patch, b.patch.face_count());
-            if (run.field.description.empty()) {
-                run.field = b.field;
-                run.field.normals = PointMatrix();
-            }
-        }
-        run.solve_seconds += solve_seconds;
-        iterations += pass_iterations;
-        passes.push_back({{"kind", sweep == 0 ? "free boundaries" : "Schwarz sweep"},
-                          {"solve_seconds", solve_seconds},
-                          {"iterations", pass_iterations}});
-    }
-    if (blocks_with_surface == 0) throw empty_object_error(source, false);
-
-    // The bound: the residual rows at the welded vertices, block by block on blocks centred on
-    // the seams, where the residual is (inside a block, x̃ solves the block's equations), so
-    // that M_b keeps the couplings across each seam (no halo needed).
-    BoundTally tally;
+    StreamingState state(layout);
+    const int passes = 2 + bo.schwarz_sweeps;  // first, sweeps, bound
+    for (int sweep = 0; sweep <= bo.schwarz_sweeps; ++sweep)
+        solve_pass(source, plan, layout, halo, sweep, passes, solver, state, progress);
+    if (state.blocks_with_surface == 0) throw empty_object_error(source, false);
     const auto bound_started = std::chrono::steady_clock::now();
-    const BlockLayout staggered = staggered_blocks(layout);
-    for (std::int64_t block = 0; block < staggered.block_count(); ++block) {
-        const VoxelBox owned = staggered.box(block);
-        const BlockStages b = run_block_stages(source, plan, owned, owned);
-        times.add(b);
-        report_block("error bound", sweep_count, std::min(block, block_count - 1));
-        if (has_owned_faces(b.patch)) tally.add(b, current_positions(b.patch, store), solver);
-    }
+    const BoundTally tally = bound_pass(source, plan, layout, passes, solver, state, progress);
     const double bound_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - bound_started).count();
+
+    WeldedRun& run = state.run;
     run.solve.solver = "blocks";
-    for (const std::string& name : solvers) run.solve.solver += (run.solve.solver == "blocks" ? "/" : "+") + name;
+    for (const std::string& name : state.solvers) run.solve.solver += (run.solve.solver == "blocks" ? "/" : "+") + name;
     run.solve.relative_residual = std::sqrt(tally.residual_squared / tally.rhs_squared);
     run.solve.error_bound = tally.error_bound();
-    run.solve.iterations = iterations;
-    run.assembly_seconds = times.regularize;
+    run.solve.iterations = state.iterations;
+    run.assembly_seconds = state.times.regularize;
     const double voxel = grid.spacing.minCoeff();
     run.blocks = {{"block_size", bo.block_size},
                   {"halo_voxels", halo},
                   {"halo_default", !bo.halo.has_value()},
-                  {"blocks", block_count},
-                  {"blocks_with_surface", blocks_with_surface},
+                  {"blocks", layout.block_count()},
+                  {"blocks_with_surface", state.blocks_with_surface},
                   {"schwarz_sweeps", bo.schwarz_sweeps},
-                  {"passes", passes},
+                  {"passes", state.passes},
                   {"bound_seconds", bound_seconds},
-                  {"largest_block_read_voxels", largest_read},
-                  {"largest_block_patch_faces", largest_patch},
+                  {"largest_block_read_voxels", state.largest_read},
+                  {"largest_block_patch_faces", state.largest_patch},
                   {"error_bound", run.solve.error_bound},
                   {"error_bound_voxels", run.solve.error_bound / voxel}};
     for (std::int64_t block = 0; block < layout.block_count(); ++block)
-        pieces[std::size_t(block)].positions = store.positions(block);
+        state.pieces[std::size_t(block)].positions = state.store.positions(block);
 
     const auto started = std::chrono::steady_clock::now();
-    run.welded = weld_pieces(pieces, grid);
+    run.welded = weld_pieces(state.pieces, grid);
     const double weld_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    const BlockTimes& t = state.times;
+    const std::string read = plan.header.shape ? "digitize" : "read";
     const std::string surfels = std::to_string(run.welded.surface.face_count()) + " surfels";
-    finish_stage(progress, plan.header.shape ? "digitize" : "read", times.read, std::to_string(run.object_voxels) + " object voxels");
-    finish_stage(progress, "surface", times.surface, surfels + " in " + std::to_string(blocks_with_surface) + " blocks");
-    finish_stage(progress, "normals", times.normals, run.field.description);
-    finish_stage(progress, "regularize", times.regularize + run.solve_seconds,
-                 run.solve.solver + ", halo " + std::to_string(halo) + " voxels, " + std::to_string(sweep_count) +
-                     (sweep_count == 1 ? " sweep" : " sweeps") + ", error bound " +
+    run.stage_seconds = {{read, t.read}, {"surface", t.surface}, {"normals", t.normals},
+                         {"regularize", t.regularize + run.solve_seconds}, {"weld", weld_seconds}};
+    finish_stage(progress, read, t.read, std::to_string(run.object_voxels) + " object voxels");
+    finish_stage(progress, "surface", t.surface, surfels + " in " + std::to_string(state.blocks_with_surface) + " blocks");
+    finish_stage(progress, "normals", t.normals, run.field.description);
+    finish_stage(progress, "regularize", t.regularize + run.solve_seconds,
+                 run.solve.solver + ", halo " + std::to_string(halo) + " voxels, first pass + " +
+                     std::to_string(bo.schwarz_sweeps) + " Schwarz sweeps, error bound " +
                      format("%.2e", run.solve.error_bound / voxel) + " voxel");
     finish_stage(progress, "weld", weld_seconds, surfels + ", " + std::to_string(run.welded.surface.component_count) + " components");
-    run.stage_seconds = {{plan.header.shape ? "digitize" : "read", times.read},
-                         {"surface", times.surface},
-                         {"normals", times.normals},
-                         {"regularize", times.regularize + run.solve_seconds},
-                         {"weld", weld_seconds}};
     PipelineResult result = welded_pipeline_result(std::move(run), plan);
     result.block_layout = layout;
     return result;
