@@ -20,7 +20,10 @@ void run(RegularizeFlags& c) {
     const ProgressCallback progress = stage_lines(stage_lines_shown(c), "dsreg: ");
     PipelineResult result = run_pipeline(c.source, c.options, progress);
     write_pipeline_outputs(result, c.options, c.outputs, c.source, progress);
-    if (!c.quiet) std::cerr << "dsreg: " << summary_line(result, c.options) << " -> " << c.outputs.mesh << '\n';
+    if (c.quiet) return;
+    for (const std::string& warning : result.warnings) std::cerr << "dsreg: warning: " << c.source.input_path << ": " << warning << '\n';
+    std::cerr << "dsreg: " << summary_line(result, c.options) << " -> " << c.outputs.mesh
+              << (result.file.world_geometry ? " (" + output_space_name(c.outputs.space) + ")" : "") << '\n';
 }
 
 }  // namespace

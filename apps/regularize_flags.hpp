@@ -29,6 +29,7 @@ struct RegularizeFlags {
     std::vector<std::int64_t> block_size;  ///< --block-size N or X,Y,Z
     std::string solver = "auto";
     int connectivity = 26;
+    std::string space = "lps";  ///< --space
     bool quiet = false, verbose = false;
 };
 

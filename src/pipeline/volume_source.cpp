@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "dsreg/error.hpp"
+#include "dsreg/value_histogram.hpp"
 #include "dsreg/volume_io.hpp"
 #include "dsreg/text.hpp"
 
@@ -122,8 +123,16 @@ LoadedVolume digitize_shape(const VolumeSource& o) {
     return loaded;
 }
 
-ValueRange value_range(const VolumeSource& o) {
+/// The object's values: --label N, or --min/--max (default value > 0).
+ValueRange object_range(const VolumeSource& o) {
     ValueRange range;
+    if (o.label) {
+        if (o.min_value || o.max_value) throw Error("--label selects one value: it cannot be combined with --min or --max");
+        if (!std::isfinite(*o.label)) throw Error("--label must be a finite number");
+        range.has_min = range.has_max = true;
+        range.min = range.max = *o.label;
+        return range;
+    }
     if (o.min_value) range.has_min = true, range.min = *o.min_value;
     if (o.max_value) range.has_max = true, range.max = *o.max_value;
     return range;
@@ -138,12 +147,13 @@ void apply_spacing(const VolumeSource& o, VoxelGrid& grid) {
 }
 
 LoadedVolume read_file(const VolumeSource& o) {
+    const ValueRange range = object_range(o);
     VolumeLimits limits;
     limits.max_voxels = memory_voxel_cap(o);
     const bool memory_bound = limits.max_voxels < o.max_voxels;
     LoadedVolume loaded;
     try {
-        loaded.volume = read_volume(o.input_path, value_range(o), o.raw_layout ? &*o.raw_layout : nullptr, limits);
+        loaded.volume = read_volume(o.input_path, range, o.raw_layout ? &*o.raw_layout : nullptr, limits, &loaded.file);
     } catch (const Error& error) {
         const std::string message = error.what();
         if (memory_bound && message.find("exceed the limit of") != std::string::npos)
@@ -159,6 +169,7 @@ LoadedVolume read_file(const VolumeSource& o) {
 /// The values that make a voxel of a file part of the object, as the options give them:
 /// "value > 0", "value >= 300", "40 <= value <= 200", "0 < value <= 50".
 std::string object_value_range(const VolumeSource& o) {
+    if (o.label) return "value = " + format_number(*o.label);
     const std::string low = o.min_value ? format_number(*o.min_value) + " <= " : "0 < ";
     const std::string high = o.max_value ? " <= " + format_number(*o.max_value) : "";
     if (!o.max_value) return o.min_value ? "value >= " + format_number(*o.min_value) : "value > 0";
@@ -180,6 +191,23 @@ std::string file_value_range(const VolumeSource& o) {
     }
 }
 
+/// The object takes most of the volume: say so, with the value histogram's main modes (the file
+/// is read twice more, streaming, nothing kept per voxel).
+std::string most_of_the_volume_warning(const VolumeSource& o, double fraction) {
+    std::string modes;
+    try {
+        VolumeLimits limits;
+        limits.max_voxels = memory_voxel_cap(o);
+        const ValueHistogram histogram = read_value_histogram(o.input_path, o.raw_layout ? &*o.raw_layout : nullptr, limits);
+        modes = describe_modes(histogram_modes(histogram), histogram.integral);
+    } catch (const std::exception&) {
+        // only a hint
+    }
+    return "the object (" + object_value_range(o) + ") takes " + format("%.0f", 100 * fraction) +
+           "% of the volume: probably the background or the scanner's field of view rather than the intended object" +
+           (modes.empty() ? "" : "; the values' main modes are " + modes) + " (choose the object with --label, --min, --max)";
+}
+
 }  // namespace
 
 namespace {
@@ -196,14 +224,17 @@ Error empty_object_error(const VolumeSource& o, bool read_value_range) {
     if (!o.shape.empty()) return Error(o.shape + ": the object is empty");
     const std::string values = read_value_range ? file_value_range(o) : "";
     return Error(o.input_path + ": the object is empty: no voxel has " + object_value_range(o) +
-                 (values.empty() ? "" : "; " + values) + " (choose the object's values with --min and --max)");
+                 (values.empty() ? "" : "; " + values) + " (choose the object's values with --label, --min and --max)");
 }
 
 LoadedVolume load_volume(const VolumeSource& o) {
     check_source(o);
     if (!o.shape.empty()) return digitize_shape(o);
     LoadedVolume loaded = read_file(o);
-    if (loaded.volume.object_voxel_count() == 0) throw empty_object_error(o, true);
+    const std::int64_t object = loaded.volume.object_voxel_count();
+    if (object == 0) throw empty_object_error(o, true);
+    const double fraction = double(object) / double(loaded.volume.grid.voxel_count());
+    if (fraction > kMostOfTheVolume) loaded.warnings.push_back(most_of_the_volume_warning(o, fraction));
     return loaded;
 }
 
@@ -228,7 +259,7 @@ BinaryVolume load_volume_box(const VolumeSource& o, const LoadedVolume& header, 
     if (header.shape) return digitize_box(*header.shape, header.h, box);
     VolumeLimits limits;
     limits.max_voxels = o.max_voxels;
-    BinaryVolume volume = read_volume_box(o.input_path, box, value_range(o), o.raw_layout ? &*o.raw_layout : nullptr, limits);
+    BinaryVolume volume = read_volume_box(o.input_path, box, object_range(o), o.raw_layout ? &*o.raw_layout : nullptr, limits);
     const VoxelGrid& grid = header.volume.grid;
     volume.grid.spacing = grid.spacing;
     volume.grid.origin = grid.voxel_center(box.lo[0], box.lo[1], box.lo[2]);
