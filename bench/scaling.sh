@@ -6,8 +6,10 @@
 # the root-mean-square vertex distance to the reference (bench/ply_distance.py), the load average.
 #   bench/scaling.sh mpi [BUILD]         H (0.1), NPS ("1 2 4"): dsreg-mpi
 #   bench/scaling.sh streaming [BUILD]   H (0.1), BLOCK (64), HALOS ("32 64"), SWEEPS ("0"), ALPHA (1e-3)
-# Every run has one OpenMP thread (the whole-volume run too). BUILD defaults to build/release. As root, OpenMPI needs OMPI_ALLOW_RUN_AS_ROOT(_CONFIRM)=1
-# (set here); ranks beyond the cores need --oversubscribe (passed).
+# Every run has one OpenMP thread (the whole-volume run too). BUILD defaults to build/release.
+# REFERENCE_DIR: keeps the CHOLMOD reference there, reused for the same H and ALPHA (the costliest
+# run: 3 GiB at h = 0.1). As root, OpenMPI needs OMPI_ALLOW_RUN_AS_ROOT(_CONFIRM)=1 (set here);
+# ranks beyond the cores need --oversubscribe (passed).
 set -euo pipefail
 mode=${1:?usage: bench/scaling.sh mpi|streaming [BUILD]}
 build=${2:-build/release}
@@ -32,7 +34,9 @@ cpu() { awk '{printf "%.1f", $2 + $3}' "${1%.ply}.time"; }
 load=$(cut -d' ' -f1 /proc/loadavg)
 echo "# $(date -u '+%F %H:%M UTC'), commit $(git -C "$here" rev-parse --short HEAD), load $load, goursat h=$h alpha=$alpha"
 shape=(--shape goursat --h "$h" --alpha "$alpha")
-timed "$work/ref.ply" "$build/dsreg" regularize "${shape[@]}" --solver cholmod
+reference=${REFERENCE_DIR:-$work}/reference_h${h}_alpha$alpha.ply
+[[ -s $reference ]] || timed "$reference" "$build/dsreg" regularize "${shape[@]}" --solver cholmod
+for suffix in ply json time; do ln -sf "${reference%.ply}.$suffix" "$work/ref.$suffix"; done
 ref_faces=$(json "$work/ref.json" "r['counts']['surfels']")
 echo "reference (cholmod): $ref_faces surfels, peak $(mib "$(json "$work/ref.json" "r['peak_memory_bytes']")") MiB," \
      "$(wall "$work/ref.ply") s wall, $(cpu "$work/ref.ply") s CPU"
