@@ -377,6 +377,14 @@ TEST(Blocks, OptionsThatNeedTheWholeSurfaceAreRefused) {
     VolumeSource limited = source;  // the --max-memory estimate is the whole-volume run's
     limited.max_memory = "4G";
     EXPECT_THROW(run_pipeline(limited, options), Error);
+    VolumeSource nifti;  // its reader holds the whole volume: refused before the file is opened
+    nifti.input_path = "no-such-volume.nii.gz";
+    try {
+        run_pipeline(nifti, options);
+        ADD_FAILURE() << "a NIfTI file was accepted for a block-wise run";
+    } catch (const Error& error) {
+        EXPECT_NE(std::string(error.what()).find("block-wise runs"), std::string::npos) << error.what();
+    }
 }
 
 }  // namespace
