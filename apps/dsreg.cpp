@@ -8,7 +8,6 @@
 #include "digitize_command.hpp"
 #include "eval_command.hpp"
 #include "regularize_command.hpp"
-#include "regularize_flags.hpp"
 #include "view_command.hpp"
 
 int main(int argc, char** argv) {

@@ -8,7 +8,7 @@
 
 #include "dsreg/text.hpp"
 #include "dsreg/error.hpp"
-#include "dsreg/evaluation.hpp"
+#include "dsreg/evaluation_report.hpp"
 #include "dsreg/mesh_io.hpp"
 #include "dsreg/pipeline.hpp"
 
@@ -18,51 +18,9 @@ namespace {
 
 struct EvalOptions {
     std::string mesh;
-    TruthShapeOptions truth;
-    std::optional<double> h;
-    std::optional<double> wall_margin;
-    int volume_cells = 64;
+    EvaluationRequest request;
     bool json = false;
 };
-
-nlohmann::json stats_json(const ErrorStats& s, bool with_p95) {
-    nlohmann::json j = {{"mean", s.mean}, {"l2", s.l2}, {"linf", s.linf}};
-    if (with_p95) j["p95"] = s.p95;
-    return j;
-}
-
-void check_positive(const char* option, const std::optional<double>& value, bool allow_zero = false) {
-    if (value && (!std::isfinite(*value) || *value < 0 || (!allow_zero && *value == 0)))
-        throw Error(std::string(option) + " must be " + (allow_zero ? "non-negative" : "positive") + " (got " +
-                    format("%g", *value) + ")");
-}
-
-bool has_clipped_axis(const ImplicitShape& shape) {
-    return shape.clipped[0] || shape.clipped[1] || shape.clipped[2];
-}
-
-nlohmann::json report_json(const EvalOptions& o, const ImplicitShape& shape, double h, double wall_margin,
-                           const MeshEvaluation& e) {
-    nlohmann::json j;
-    j["mesh"] = o.mesh;
-    j["shape"] = shape.name;
-    j["h"] = h;
-    j["wall_margin"] = wall_margin;
-    j["vertices"] = {{"evaluated", e.vertices_evaluated}, {"outside_region", e.vertices_outside_region}};
-    j["faces"] = {{"evaluated", e.faces_evaluated}, {"outside_region", e.faces_outside_region},
-                  {"degenerate", e.faces_degenerate}};
-    j["vertex_distance"] = stats_json(e.vertex_distance, true);
-    if (o.h) j["vertex_distance_h"] = stats_json(e.vertex_distance.scaled(1.0 / h), true);
-    j["normal_angle_deg"] = stats_json(e.normal_angle_deg, true);
-    j["mesh_volume"] = e.mesh_volume;
-    j["shape_volume"] = e.shape_volume;
-    j["relative_volume_error"] = e.relative_volume_error;
-    j["voxel_classification"] = {{"correct", e.voxels.correct}, {"total", e.voxels.total},
-                                 {"share", e.voxels.share()}, {"h", h}};
-    j["triangle_min_angle_deg"] = {{"min", e.triangle_min_angle_min_deg}, {"mean", e.triangle_min_angle_mean_deg},
-                                   {"triangles", e.triangles}};
-    return j;
-}
 
 void print_stats_row(std::ostream& out, const std::string& name, const ErrorStats& s, const char* pattern,
                      const std::string& unit) {
@@ -72,18 +30,19 @@ void print_stats_row(std::ostream& out, const std::string& name, const ErrorStat
     out << unit << '\n';
 }
 
-void print_table(std::ostream& out, const EvalOptions& o, const ImplicitShape& shape, double h, double wall_margin,
-                 const MeshEvaluation& e) {
-    out << "dsreg eval " << o.mesh << " against " << shape.name << "\n";
+void print_table(std::ostream& out, const std::string& mesh, const EvaluationRun& run) {
+    const MeshEvaluation& e = run.evaluation;
+    const double h = run.h;
+    out << "dsreg eval " << mesh << " against " << run.shape.name << "\n";
     out << "  " << e.vertices_evaluated << " vertices and " << e.faces_evaluated << " faces evaluated";
     if (e.vertices_outside_region + e.faces_outside_region > 0)
         out << " (" << e.vertices_outside_region << " vertices and " << e.faces_outside_region
-            << " faces within " << format("%g", wall_margin) << " of a clipped box face left out)";
+            << " faces within " << format("%g", run.wall_margin) << " of a clipped box face left out)";
     if (e.faces_degenerate > 0) out << "; " << e.faces_degenerate << " faces without a normal";
     out << "\n\n";
     out << "  quantity                      mean          L2        Linf         p95\n";
     print_stats_row(out, "vertex distance", e.vertex_distance, "%10.4g", "(physical units)");
-    if (o.h) print_stats_row(out, "vertex distance / h", e.vertex_distance.scaled(1.0 / h), "%10.4f", "(units of h)");
+    if (run.h_given) print_stats_row(out, "vertex distance / h", e.vertex_distance.scaled(1.0 / h), "%10.4f", "(units of h)");
     print_stats_row(out, "normal angle", e.normal_angle_deg, "%10.3f", "(degrees)");
     out << "\n  relative volume error   " << format("%+.3e", e.relative_volume_error) << "  (mesh "
         << format("%.6g", e.mesh_volume) << ", shape " << format("%.6g", e.shape_volume) << ")\n";
@@ -94,26 +53,11 @@ void print_table(std::ostream& out, const EvalOptions& o, const ImplicitShape& s
 }
 
 void run(const EvalOptions& o) {
-    check_positive("--h", o.h);
-    check_positive("--wall-margin", o.wall_margin, true);
-    if (o.volume_cells < 8) throw Error("--volume-cells must be at least 8");
-    const ImplicitShape shape = make_truth_shape(o.truth);
+    check_evaluation_request(o.request);  // bad flags first, then the file
     const PolygonMesh mesh = read_mesh(o.mesh);
-    const double h = o.h ? *o.h : default_grid_step(shape);
-    const double wall_margin = o.wall_margin ? *o.wall_margin : (has_clipped_axis(shape) ? 3.0 * h : 0.0);
-
-    MeshEvaluationOptions options;
-    options.grid_step = h;
-    options.wall_margin = wall_margin;
-    options.volume_cells = o.volume_cells;
-    MeshEvaluation evaluation;
-    try {
-        evaluation = evaluate_mesh(mesh, shape, options);
-    } catch (const Error& e) {
-        throw Error(o.mesh + ": " + e.what());
-    }
-    if (o.json) std::cout << report_json(o, shape, h, wall_margin, evaluation).dump(2) << '\n';
-    else print_table(std::cout, o, shape, h, wall_margin, evaluation);
+    const EvaluationRun run = run_evaluation(mesh, o.mesh, o.request);
+    if (o.json) std::cout << evaluation_report(run, o.mesh).dump(2) << '\n';
+    else print_table(std::cout, o.mesh, run);
 }
 
 }  // namespace
@@ -133,14 +77,18 @@ void add_truth_shape_options(CLI::App& command, TruthShapeOptions& o) {
     command.add_option("--plane-offset", o.plane_offset, "Signed distance d of 'plane' from the origin")->capture_default_str();
 }
 
-ImplicitShape make_truth_shape(const TruthShapeOptions& o) {
-    if (o.box && (!(*o.box > 0) || !std::isfinite(*o.box))) throw Error("--box must be positive (got " + format("%g", *o.box) + ")");
-    if (o.shape == "plane") {
-        if (o.plane_normal.size() != 3) throw Error("--plane-normal needs three values X,Y,Z");
-        return make_plane_shape(Eigen::Vector3d(o.plane_normal[0], o.plane_normal[1], o.plane_normal[2]), o.plane_offset,
-                                o.box ? *o.box : 1.0);
-    }
-    return make_shape(o.shape, o.box ? *o.box : 10.0);
+void add_evaluation_flags(CLI::App& command, EvaluationRequest& request) {
+    add_truth_shape_options(command, request.truth);
+    command.add_option("--h", request.h,
+                       "Grid step: distances are also given in units of h, and the voxel classification uses "
+                       "digitize(shape, h) (default: 1/64 of the shape's extent, as for regularize)");
+    command.add_option("--wall-margin", request.wall_margin,
+                       "Leave out vertices and faces closer than this to a clipped box face (physical units; "
+                       "default 3h for shapes clipped by their box, else 0)");
+    command.add_option("--volume-cells", request.volume_cells,
+                       "Initial cells per axis of the quadrature of the shape's volume (features thinner than 1/N of "
+                       "the box may be missed)")
+        ->capture_default_str();
 }
 
 void add_eval_command(CLI::App& app) {
@@ -149,14 +97,7 @@ void add_eval_command(CLI::App& app) {
         "eval", "Measure a mesh (OBJ/OFF/PLY/STL/VTK/VTP, from dsreg or any tool) against an implicit shape: vertex distance, "
                 "normal error, volume, voxel classification, triangle angles");
     cmd->add_option("mesh", options->mesh, "Mesh file: .obj .off .ply .stl .vtk .vtp (triangles and/or quads)")->required();
-    add_truth_shape_options(*cmd, options->truth);
-    cmd->add_option("--h", options->h,
-                    "Grid step: distances are also given in units of h, and the voxel classification uses "
-                    "digitize(shape, h) (default: 1/64 of the shape's extent, as for regularize)");
-    cmd->add_option("--wall-margin", options->wall_margin,
-                    "Leave out vertices and faces closer than this to a clipped box face (physical units; "
-                    "default 3h for shapes clipped by their box, else 0)");
-    cmd->add_option("--volume-cells", options->volume_cells, "Initial cells per axis of the quadrature of the shape's volume (features thinner than 1/N of the box may be missed)")->capture_default_str();
+    add_evaluation_flags(*cmd, options->request);
     cmd->add_flag("--json", options->json, "Print one JSON object instead of the table");
     cmd->callback([options] { run(*options); });
 }

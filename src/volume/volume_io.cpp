@@ -212,17 +212,20 @@ ScalarVolume VoxelDestination::take_values() {
 
 InputFile::InputFile(const std::string& path) : path_(path) {
     namespace fs = std::filesystem;
+    const auto refuse = [&](const std::string& problem, int error_number) {
+        throw FileError(path + ": " + problem, error_number);
+    };
     std::error_code error;
     const fs::file_status status = fs::status(path, error);
-    if (status.type() == fs::file_type::not_found) fail("cannot open: no such file");
-    if (error) fail("cannot open: " + error.message());
-    if (status.type() == fs::file_type::directory) fail("cannot open: is a directory, not a volume file");
-    if (status.type() != fs::file_type::regular) fail("cannot open: not a regular file");
+    if (status.type() == fs::file_type::not_found) refuse("cannot open: no such file", ENOENT);
+    if (error) refuse("cannot open: " + error.message(), error.value());
+    if (status.type() == fs::file_type::directory) refuse("cannot open: is a directory, not a volume file", EISDIR);
+    if (status.type() != fs::file_type::regular) refuse("cannot open: not a regular file", 0);
     size_ = fs::file_size(path, error);
-    if (error) fail("cannot determine the file size: " + error.message());
+    if (error) refuse("cannot determine the file size: " + error.message(), error.value());
     errno = 0;
     if (buffer_.open(path, std::ios::in | std::ios::binary) == nullptr)
-        fail(std::string("cannot open for reading: ") + (errno != 0 ? std::strerror(errno) : "unknown error"));
+        refuse(std::string("cannot open for reading: ") + (errno != 0 ? std::strerror(errno) : "unknown error"), errno);
 }
 
 int InputFile::get() {
@@ -515,30 +518,6 @@ void require_exact_payload(const InputFile& file, std::uint64_t expected_bytes, 
     if (available > expected_bytes)
         file.fail(std::to_string(available - expected_bytes) + " trailing bytes after the payload: " + description + ", " + holds);
 }
-
-namespace {
-
-/// The rows of the region's box, each read at its offset in the payload that starts here.
-void decode_stored_rows(InputFile& file, SampleWriter& sink, const StreamRegion& region) {
-    const std::uint64_t start = file.position();
-    const auto bytes = static_cast<std::uint64_t>(sink.sample_bytes());
-    const Index3& d = region.dims;
-    const VoxelBox& box = region.box;
-    const Index3 size = box.size();
-    std::vector<std::uint8_t> row(std::size_t(size[0]) * bytes);
-    for (std::int64_t k = box.lo[2]; k < box.hi[2]; ++k)
-        for (std::int64_t j = box.lo[1]; j < box.hi[1]; ++j) {
-            const auto first = static_cast<std::uint64_t>(box.lo[0] + d[0] * (j + d[1] * k));
-            file.skip(start + first * bytes - file.position());
-            if (file.read(row.data(), row.size()) != row.size())
-                file.fail("truncated payload: the file could not be read at offset " + std::to_string(start + first * bytes));
-            sink.skip_to(first);
-            sink.consume(row.data(), row.size());
-        }
-    sink.skip_to(static_cast<std::uint64_t>(d[0] * d[1] * d[2]));
-}
-
-}  // namespace
 
 void decode_stored_prefix(InputFile& file, SampleWriter& sink) {
     std::vector<std::uint8_t> chunk(std::size_t(1) << 20);
