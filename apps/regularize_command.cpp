@@ -37,6 +37,14 @@ void add_volume_source_options(CLI::App& command, VolumeSource& o, CliFlags& fla
         ->expected(3)
         ->delimiter(',');
     command.add_option("--max-voxels", o.max_voxels, "Refuse volumes with more voxels than this")->capture_default_str();
+    command.add_flag("--multi-label", o.multi_label,
+                     "The input is a label map: every non-zero value is a label, and every interface between two "
+                     "labels (or a label and the background) is regularized at once, shared by both; writes -o with "
+                     "every interface face once and OUT-<label>.EXT, the closed surface of each label "
+                     "(docs/multi-label.md)");
+    command.add_option("--labels", o.labels,
+                       "With --multi-label (implied): keep these labels, e.g. 1,4,7; the other voxels join the background")
+        ->delimiter(',');
     command.add_option("--max-memory", o.max_memory,
                        "Refuse runs whose estimated peak memory exceeds this, e.g. 4G, 512M (K/M/G/T: powers of 1024)");
 }
@@ -136,6 +144,7 @@ void apply_flags(RegularizeCommand& c) {
     c.options.solver = parse_solver_kind(f.solver);
     c.outputs.space = parse_output_space(f.space);
     c.options.connectivity = f.connectivity == 6 ? Connectivity::Six : Connectivity::TwentySix;
+    c.options.validity = f.no_check ? ValidityMode::Off : f.no_repair ? ValidityMode::Check : ValidityMode::Repair;
     NormalFieldOptions& normals = c.options.normals;
     const bool at = normals.kind == "at";
     for (const CLI::Option* option : f.at_only)
@@ -147,6 +156,7 @@ void apply_flags(RegularizeCommand& c) {
 void apply_and_check_flags(RegularizeCommand& c) {
     apply_flags(c);
     check_pipeline_options(c.options, !c.source.shape.empty());
+    check_multi_label_options(c.source, c.options);
     check_pipeline_outputs(c.outputs);
 }
 
@@ -210,6 +220,10 @@ void add_pipeline_flags(CLI::App& command, RegularizeCommand& c) {
                        "Iterative solvers stop once their provable bound on the distance to the exact solution is "
                        "below this, in voxels")
         ->capture_default_str();
+    command.add_flag("--no-repair", c.flags.no_repair,
+                     "Keep the mesh as solved: self-intersections and faces folded against u are counted and reported "
+                     "but not repaired (docs/validity.md)");
+    command.add_flag("--no-check", c.flags.no_check, "Do not even count them (implies --no-repair)");
     command.add_flag("--triangulate", c.outputs.triangulate, "Split each quad along its shorter diagonal");
     command.add_option("--input-mesh", c.outputs.input_mesh, "Also write the unregularized digital surface to this file");
     command.add_option("--report", c.outputs.report, "Write counts, timings, energies and parameters as JSON");

@@ -19,6 +19,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <string>
 #include <vector>
 
 namespace dsreg {
@@ -83,6 +84,31 @@ struct BinaryVolume {
     }
     std::int64_t object_voxel_count() const;
 };
+
+/// A label map: every voxel carries a label index, 0 being the background (as is everything
+/// outside the grid). Indices are compact, 0 … label_count() − 1, in increasing order of the
+/// voxel values they stand for: values[index] is the value of label `index` in the input
+/// (values[0] = 0, the background, even when no voxel has it). 4 bytes per voxel.
+struct LabelVolume {
+    VoxelGrid grid;
+    std::vector<std::uint32_t> labels;  ///< label index of each voxel (linear_index order)
+    std::vector<std::int64_t> values;   ///< input value of each label index; values[0] = 0
+
+    std::uint32_t label(std::int64_t i, std::int64_t j, std::int64_t k) const {
+        return grid.contains(i, j, k) ? labels[static_cast<std::size_t>(grid.linear_index(i, j, k))] : 0u;
+    }
+    std::int64_t label_count() const { return static_cast<std::int64_t>(values.size()); }
+    /// Voxels of each label index (index 0: background voxels of the grid).
+    std::vector<std::int64_t> voxel_counts() const;
+};
+
+/// The binary volume as a label map: label 1 (value 1) for the object, 0 elsewhere.
+LabelVolume label_volume_from_mask(const BinaryVolume& volume);
+
+/// Keeps the labels whose value is listed (each must occur in the volume) and turns every other
+/// voxel into background; the indices are renumbered compactly. Throws dsreg::Error naming
+/// `option` for a listed value that is 0 or absent.
+void keep_labels(LabelVolume& volume, const std::vector<std::int64_t>& values, const std::string& option);
 
 /// Which voxel values form the object. Default: value > 0. With `min` set the test is
 /// value ≥ min; with `max` set, value ≤ max (both inclusive, as `--min/--max` in the CLI).

@@ -51,6 +51,20 @@ void check_choices(const NormalFieldOptions& o) {
     parse_integral_invariant_kernel(o.ii_kernel);
 }
 
+/// Integral invariants of each face's inner label on a label map's complex, and near junctions
+/// the convolved trivial normals of the face's own interface (docs/multi-label.md).
+PointMatrix label_map_field(const LoadedVolume& loaded, const DigitalSurface& surface, double radius,
+                            IntegralInvariantKernel kernel, bool extrapolate, NormalField& field) {
+    const LabelVolume& labels = *loaded.labels;
+    PointMatrix u = extrapolate ? extrapolated_integral_invariant_normals(labels, surface, radius, kernel)
+                                : integral_invariant_normals(labels, surface, radius, kernel);
+    field.interface_normal_faces = use_interface_normals_near_junctions(labels, surface, radius, u);
+    if (field.interface_normal_faces > 0)
+        field.description += "; interface normals on the " + std::to_string(field.interface_normal_faces) +
+                             " faces near junctions";
+    return u;
+}
+
 /// The input field g (or the whole field, without AT).
 PointMatrix estimate_input_field(const NormalFieldOptions& o, const LoadedVolume& loaded, const DigitalSurface& surface,
                                  NormalField& field) {
@@ -70,11 +84,10 @@ PointMatrix estimate_input_field(const NormalFieldOptions& o, const LoadedVolume
         field.ii_kernel = o.ii_kernel;
         field.ii_extrapolated = o.ii_extrapolate;
         const IntegralInvariantKernel kernel = parse_integral_invariant_kernel(o.ii_kernel);
-        if (o.ii_extrapolate) {
-            field.description = "integral invariants (" + o.ii_kernel + " kernel), extrapolated from r and r/sqrt(2)" + r;
-            return extrapolated_integral_invariant_normals(loaded.volume, surface, *field.radius, kernel);
-        }
-        field.description = "integral invariants (" + o.ii_kernel + " kernel)" + r;
+        field.description = "integral invariants (" + o.ii_kernel + " kernel)" +
+                            (o.ii_extrapolate ? ", extrapolated from r and r/sqrt(2)" : "") + r;
+        if (loaded.labels) return label_map_field(loaded, surface, *field.radius, kernel, o.ii_extrapolate, field);
+        if (o.ii_extrapolate) return extrapolated_integral_invariant_normals(loaded.volume, surface, *field.radius, kernel);
         return integral_invariant_normals(loaded.volume, surface, *field.radius, kernel);
     }
     if (kind == "exact") {
