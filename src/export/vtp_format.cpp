@@ -105,9 +105,11 @@ void write_vtp_polydata(OutputBuffer& buffer, const PolygonMesh& mesh) {
         write_data_array(buffer, "Float64", "u", 3, binary_array<double>([&](std::size_t i) {
                              return mesh.face_normals(static_cast<Eigen::Index>(i / 3), static_cast<Eigen::Index>(i % 3));
                          }, std::size_t(3 * m)));
-    for (const auto& [name, values] : mesh.face_integers)
-        write_data_array(buffer, "Int32", xml_escaped(name), 1,
+    for (const auto& integers : mesh.face_integers) {
+        const auto& values = integers.second;  // not a structured binding: lambdas capture it (clang 14)
+        write_data_array(buffer, "Int32", xml_escaped(integers.first), 1,
                          binary_array<std::int32_t>([&](std::size_t i) { return values[static_cast<Eigen::Index>(i)]; }, std::size_t(m)));
+    }
     buffer.append("      </CellData>\n      <Points>\n");
     write_data_array(buffer, "Float64", "Points", 3, binary_array<double>([&](std::size_t i) {
                          return mesh.vertices(static_cast<Eigen::Index>(i / 3), static_cast<Eigen::Index>(i % 3));

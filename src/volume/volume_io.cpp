@@ -28,7 +28,7 @@ namespace {
 
 /// Integers print exactly, other values with enough digits to be recognised.
 std::string format_value(double value) {
-    if (value == static_cast<double>(static_cast<std::int64_t>(value)) && value > -9e18 && value < 9e18)
+    if (value > -9e18 && value < 9e18 && value == std::trunc(value))  // the range first: the cast of NaN or 1e19 is undefined
         return std::to_string(static_cast<std::int64_t>(value));
     std::ostringstream text;
     text.precision(17);
