@@ -15,6 +15,7 @@
 
 #include <functional>
 #include <ostream>
+#include <string>
 
 #include "dsreg/progress.hpp"
 
@@ -27,6 +28,7 @@ struct ProgressDisplayOptions {
     double delay_seconds = 1.0;    ///< a stage shows its updates once it has run this long
     double interval_seconds = 0.1; ///< at most one update per interval (live: redraws)
     int width = 80;                ///< characters of a live line, at least 20
+    std::string prefix = "dsreg: ";  ///< starts every line (dsreg-mpi: "dsreg-mpi: ")
     /// Monotonic time in seconds; empty: std::chrono::steady_clock (tests pass their own).
     std::function<double()> clock;
 };

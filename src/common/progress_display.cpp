@@ -17,8 +17,8 @@ double steady_seconds() {
 }
 
 /// "solve  62%  ~1.4 s left  amg iteration 12, …" (fraction and time left when known).
-std::string update_text(const ProgressEvent& event, double elapsed) {
-    std::string text = "dsreg: " + event.stage;
+std::string update_text(const std::string& prefix, const ProgressEvent& event, double elapsed) {
+    std::string text = prefix + event.stage;
     if (event.fraction >= 0) {
         const double f = std::min(event.fraction, 1.0);
         text += "  " + format("%.0f", 100 * f) + "%";
@@ -30,8 +30,8 @@ std::string update_text(const ProgressEvent& event, double elapsed) {
     return text;
 }
 
-std::string summary_text(const ProgressEvent& event) {
-    return "dsreg: " + event.stage + ' ' + format("%8.3f s", event.seconds) + (event.detail.empty() ? "" : "  " + event.detail);
+std::string summary_text(const std::string& prefix, const ProgressEvent& event) {
+    return prefix + event.stage + ' ' + format("%8.3f s", event.seconds) + (event.detail.empty() ? "" : "  " + event.detail);
 }
 
 class Display {
@@ -53,7 +53,7 @@ public:
         }
         if (event.finished) {
             erase();
-            if (options_.stage_summaries) out_ << summary_text(event) << '\n' << std::flush;
+            if (options_.stage_summaries) out_ << summary_text(options_.prefix, event) << '\n' << std::flush;
             stage_.clear();
             running_ = false;
             last_update_ = -1;
@@ -62,7 +62,7 @@ public:
         if (!options_.updates || now - running_since_ < options_.delay_seconds) return;
         if (last_update_ >= 0 && now - last_update_ < options_.interval_seconds) return;
         last_update_ = now;
-        std::string text = update_text(event, now - stage_started_);
+        std::string text = update_text(options_.prefix, event, now - stage_started_);
         if (options_.live) {
             if (int(text.size()) > options_.width - 1) text.resize(std::size_t(options_.width - 1));
             out_ << '\r' << text << "\033[K" << std::flush;
