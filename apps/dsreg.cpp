@@ -6,6 +6,7 @@
 
 #include "dsreg/error.hpp"
 #include "convergence_command.hpp"
+#include "digitize_command.hpp"
 #include "eval_command.hpp"
 #include "regularize_command.hpp"
 
@@ -33,6 +34,7 @@ int main(int argc, char** argv) {
     dsreg::cli::add_regularize_command(app);
     dsreg::cli::add_eval_command(app);
     dsreg::cli::add_convergence_command(app);
+    dsreg::cli::add_digitize_command(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

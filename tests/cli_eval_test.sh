@@ -94,6 +94,18 @@ check "shifted octahedron: Linf 0.25" near "$(json_field "$shifted" vertex_dista
 check "shifted octahedron: mean" near "$(json_field "$shifted" vertex_distance mean)" \
     "$(awk 'BEGIN { printf "%.15f", (2 * 0.25 + 4 * (sqrt(1.0625) - 1)) / 6 }')" 1e-12
 
+# --- digitize ------------------------------------------------------------------------------
+# The .vol file holds the very voxels regularize digitizes: the same digital surface from both.
+grid=$("$DSREG" digitize --shape goursat --h 0.5 -o "$work/g.vol")
+check "digitize prints the grid" grep -q "^dims [0-9]*,[0-9]*,[0-9]* spacing 0.5,0.5,0.5 origin " <<<"$grid"
+"$DSREG" regularize --shape goursat --h 0.5 -o "$work/g-shape.obj" --report "$work/g-shape.json" -q
+"$DSREG" regularize "$work/g.vol" -o "$work/g-file.obj" --report "$work/g-file.json" -q
+surfels() { grep -o '"surfels": [0-9]*' "$1"; }
+check "digitize: same surfels as --shape" test "$(surfels "$work/g-shape.json")" = "$(surfels "$work/g-file.json")"
+expect_error "digitize without --shape" "--shape" digitize --h 0.5 -o "$work/out.vol"
+expect_error "digitize to a mesh" ".vol" digitize --shape goursat --h 0.5 -o "$work/out.obj"
+expect_error "digitize unknown shape" "blob" digitize --shape blob -o "$work/out.vol"
+
 # --- convergence -----------------------------------------------------------------------------
 summary=$("$DSREG" convergence --shape sphere1 --h 0.2:0.1:3 --out "$work/conv/nested" 2>"$work/progress.txt")
 check "convergence exits 0" test $? -eq 0
