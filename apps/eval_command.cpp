@@ -10,6 +10,7 @@
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
 #include "dsreg/mesh_io.hpp"
+#include "dsreg/volume_io.hpp"
 #include "volume_source.hpp"
 
 namespace dsreg::cli {
@@ -19,6 +20,8 @@ namespace {
 struct EvalOptions {
     std::string mesh;
     TruthShapeOptions truth;
+    std::string volume;  ///< --volume: classify the voxel centres of this file instead
+    std::optional<double> min_value, max_value;
     std::optional<double> h;
     std::optional<double> wall_margin;
     int volume_cells = 64;
@@ -41,6 +44,27 @@ bool has_clipped_axis(const ImplicitShape& shape) {
     return shape.clipped[0] || shape.clipped[1] || shape.clipped[2];
 }
 
+nlohmann::json classification_json(const VoxelClassification& c) {
+    return {{"correct", c.correct},
+            {"total", c.total},
+            {"share", c.share()},
+            {"object_correct", c.object_correct},
+            {"object_total", c.object_total},
+            {"object_share", c.object_share()},
+            {"boundary_correct", c.boundary_correct},
+            {"boundary_total", c.boundary_total},
+            {"boundary_share", c.boundary_share()}};
+}
+
+void print_classification(std::ostream& out, const VoxelClassification& c, const std::string& source) {
+    out << "  voxel centres correct   " << c.correct << " / " << c.total << " = " << format("%.4f", 100.0 * c.share())
+        << " %  (" << source << ")\n";
+    out << "    object voxels         " << c.object_correct << " / " << c.object_total << " = "
+        << format("%.4f", 100.0 * c.object_share()) << " %\n";
+    out << "    next to the surface   " << c.boundary_correct << " / " << c.boundary_total << " = "
+        << format("%.4f", 100.0 * c.boundary_share()) << " %\n";
+}
+
 nlohmann::json report_json(const EvalOptions& o, const ImplicitShape& shape, double h, double wall_margin,
                            const MeshEvaluation& e) {
     nlohmann::json j;
@@ -57,8 +81,8 @@ nlohmann::json report_json(const EvalOptions& o, const ImplicitShape& shape, dou
     j["mesh_volume"] = e.mesh_volume;
     j["shape_volume"] = e.shape_volume;
     j["relative_volume_error"] = e.relative_volume_error;
-    j["voxel_classification"] = {{"correct", e.voxels.correct}, {"total", e.voxels.total},
-                                 {"share", e.voxels.share()}, {"h", h}};
+    j["voxel_classification"] = classification_json(e.voxels);
+    j["voxel_classification"]["h"] = h;
     j["triangle_min_angle_deg"] = {{"min", e.triangle_min_angle_min_deg}, {"mean", e.triangle_min_angle_mean_deg},
                                    {"triangles", e.triangles}};
     return j;
@@ -87,13 +111,39 @@ void print_table(std::ostream& out, const EvalOptions& o, const ImplicitShape& s
     print_stats_row(out, "normal angle", e.normal_angle_deg, "%10.3f", "(degrees)");
     out << "\n  relative volume error   " << format("%+.3e", e.relative_volume_error) << "  (mesh "
         << format("%.6g", e.mesh_volume) << ", shape " << format("%.6g", e.shape_volume) << ")\n";
-    out << "  voxel centres correct   " << e.voxels.correct << " / " << e.voxels.total << " = "
-        << format("%.4f", 100.0 * e.voxels.share()) << " %  (digitization at h = " << format("%g", h) << ")\n";
+    print_classification(out, e.voxels, "digitization at h = " + format("%g", h));
     out << "  triangle min angle      min " << format("%.2f", e.triangle_min_angle_min_deg) << ", mean "
         << format("%.2f", e.triangle_min_angle_mean_deg) << " degrees over " << e.triangles << " triangles\n";
 }
 
+/// --volume: the mesh against the voxels of a file (its own coordinates: spacing 1, origin 0).
+void run_against_volume(const EvalOptions& o) {
+    if (o.h || o.wall_margin || !o.truth.shape.empty())
+        throw Error("--volume gives the truth as voxels: --shape, --h and --wall-margin do not apply");
+    ValueRange range;
+    if (o.min_value) range.has_min = true, range.min = *o.min_value;
+    if (o.max_value) range.has_max = true, range.max = *o.max_value;
+    const BinaryVolume volume = read_volume(o.volume, range);
+    const PolygonMesh mesh = read_mesh(o.mesh);
+    VoxelClassification c;
+    try {
+        c = classify_voxel_centres(mesh, volume);
+    } catch (const Error& e) {
+        throw Error(o.mesh + ": " + e.what());
+    }
+    if (o.json) {
+        nlohmann::json j = {{"mesh", o.mesh}, {"volume", o.volume}, {"voxel_classification", classification_json(c)}};
+        std::cout << j.dump(2) << '\n';
+        return;
+    }
+    std::cout << "dsreg eval " << o.mesh << " against the voxels of " << o.volume << "\n\n";
+    print_classification(std::cout, c, o.volume);
+}
+
 void run(const EvalOptions& o) {
+    if (!o.volume.empty()) return run_against_volume(o);
+    if (o.truth.shape.empty()) throw Error("eval needs the truth: --shape (an implicit shape) or --volume (a volume file)");
+    if (o.min_value || o.max_value) throw Error("--min and --max only apply to --volume");
     check_positive("--h", o.h);
     check_positive("--wall-margin", o.wall_margin, true);
     if (o.volume_cells < 8) throw Error("--volume-cells must be at least 8");
@@ -118,12 +168,11 @@ void run(const EvalOptions& o) {
 
 }  // namespace
 
-void add_truth_shape_options(CLI::App& command, TruthShapeOptions& o) {
-    command.add_option("--shape", o.shape,
+CLI::Option* add_truth_shape_options(CLI::App& command, TruthShapeOptions& o) {
+    CLI::Option* shape = command.add_option("--shape", o.shape,
                        "Ground truth: a named shape (sphere1 sphere9 ellipsoid cylinder torus rcube goursat goursat-hole "
                        "distel leopold diabolo heart crixxi), a polynomial in x, y, z (F <= 0 inside), or 'plane' "
-                       "(the tilted half-space n.p <= d in [-B,B]^3)")
-        ->required();
+                       "(the tilted half-space n.p <= d in [-B,B]^3)");
     command.add_option("--box", o.box, "Half-size B of the box of a polynomial shape (default 10, as for regularize) or "
                                        "of 'plane' (default 1)");
     command.add_option("--plane-normal", o.plane_normal, "Normal n of 'plane' (normalized)")
@@ -131,6 +180,7 @@ void add_truth_shape_options(CLI::App& command, TruthShapeOptions& o) {
         ->delimiter(',')
         ->capture_default_str();
     command.add_option("--plane-offset", o.plane_offset, "Signed distance d of 'plane' from the origin")->capture_default_str();
+    return shape;
 }
 
 ImplicitShape make_truth_shape(const TruthShapeOptions& o) {
@@ -150,6 +200,11 @@ void add_eval_command(CLI::App& app) {
                 "normal error, volume, voxel classification, triangle angles");
     cmd->add_option("mesh", options->mesh, "Mesh file: .obj .off .ply .stl (triangles and/or quads)")->required();
     add_truth_shape_options(*cmd, options->truth);
+    cmd->add_option("--volume", options->volume,
+                    "Ground truth as voxels instead of --shape: a volume file (.vol .longvol .pgm3d); only the voxel "
+                    "classification is measured, in the file's coordinates (spacing 1, origin 0, as regularize)");
+    cmd->add_option("--min", options->min_value, "--volume: object = voxels with value >= MIN (default: value > 0)");
+    cmd->add_option("--max", options->max_value, "--volume: object = voxels with value <= MAX");
     cmd->add_option("--h", options->h,
                     "Grid step: distances are also given in units of h, and the voxel classification uses "
                     "digitize(shape, h) (default: 1/64 of the shape's extent, as for regularize)");

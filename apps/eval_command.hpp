@@ -19,13 +19,14 @@ struct TruthShapeOptions {
     double plane_offset = 0.01;
 };
 
-/// Registers --shape (required), --box, --plane-normal, --plane-offset on `command`.
-void add_truth_shape_options(CLI::App& command, TruthShapeOptions& options);
+/// Registers --shape, --box, --plane-normal, --plane-offset on `command`; returns --shape (for
+/// commands that require it).
+CLI::Option* add_truth_shape_options(CLI::App& command, TruthShapeOptions& options);
 
 /// Builds the shape. Throws dsreg::Error for an unknown shape or bad plane parameters.
 ImplicitShape make_truth_shape(const TruthShapeOptions& options);
 
-/// Registers the `eval` subcommand on `app`.
+/// Registers the `eval` subcommand (truth: --shape, or --volume for a volume file) on `app`.
 void add_eval_command(CLI::App& app);
 
 }  // namespace dsreg::cli

@@ -409,6 +409,33 @@ TEST(EvaluateMesh, FineSphereMeshOnACoarseGridClassifiesEveryVoxel) {
     EXPECT_LT(moved.voxels.share(), 0.99);
 }
 
+TEST(ClassifyVoxelCentres, CountsTheObjectAndTheVoxelsNextToTheSurfaceApart) {
+    // A 4×4×4 block of object voxels (indices 2…5) in an 8³ grid.
+    const BinaryVolume volume = test::make_volume({8, 8, 8}, [](double x, double y, double z) {
+        return x >= 2 && x <= 5 && y >= 2 && y <= 5 && z >= 2 && z <= 5;
+    });
+    // Its exact boundary: every centre agrees.
+    const VoxelClassification exact = classify_voxel_centres(box_mesh(Vec3(1.5, 1.5, 1.5), Vec3(5.5, 5.5, 5.5), 4), volume);
+    EXPECT_EQ(exact.correct, 512);
+    EXPECT_EQ(exact.object_correct, 64);
+    EXPECT_EQ(exact.object_total, 64);
+    // Next to the surface: the 56 outer object voxels and the 6·16 background voxels facing them.
+    EXPECT_EQ(exact.boundary_total, 56 + 96);
+    EXPECT_EQ(exact.boundary_correct, 56 + 96);
+    // Shrunk to the 2×2×2 core: the 56 outer object voxels fall outside.
+    const VoxelClassification shrunk = classify_voxel_centres(box_mesh(Vec3(2.5, 2.5, 2.5), Vec3(4.5, 4.5, 4.5), 2), volume);
+    EXPECT_EQ(shrunk.correct, 512 - 56);
+    EXPECT_EQ(shrunk.object_correct, 8);
+    EXPECT_EQ(shrunk.boundary_correct, 96);
+    EXPECT_NEAR(shrunk.boundary_share(), 96.0 / 152.0, 1e-15);
+    // Grown by a voxel: the 96 background voxels next to the surface fall inside (and 56 more at
+    // the edges and corners of the grown box, which are not next to the surface).
+    const VoxelClassification grown = classify_voxel_centres(box_mesh(Vec3(0.5, 0.5, 0.5), Vec3(6.5, 6.5, 6.5), 6), volume);
+    EXPECT_EQ(grown.object_correct, 64);
+    EXPECT_EQ(grown.boundary_correct, 56);
+    EXPECT_EQ(grown.correct, 512 - (216 - 64));
+}
+
 TEST(EvaluateMesh, BoxAgainstAPlaneClippedBlockLeavesOutTheWalls) {
     // The solid z ≤ 0.5 clipped by [-1,1]³ is the block [-1,1]²×[-1,0.5]. Its box mesh: the only
     // part of F = 0 is the top face; the other faces lie on the box walls and are left out.
