@@ -13,16 +13,11 @@
 
 #include "dsreg/error.hpp"
 #include "dsreg/normals.hpp"
+#include "integral_invariant_sums.hpp"
 
 namespace dsreg {
 
-namespace {
-
-/// The object voxels of each row (j,k) as runs [first, last] of consecutive x indices.
-struct RowRuns {
-    std::vector<std::int64_t> row_first;  ///< size ny·nz + 1, into `runs`
-    std::vector<std::array<std::int32_t, 2>> runs;
-};
+namespace detail {
 
 RowRuns build_row_runs(const BinaryVolume& volume) {
     const auto& d = volume.grid.dims;
@@ -49,6 +44,15 @@ RowRuns build_row_runs(const BinaryVolume& volume) {
     return result;
 }
 
+}  // namespace detail
+
+namespace {
+
+using detail::RowRuns;
+using detail::RowSums;
+using detail::Stencil;
+using detail::StencilRow;
+
 /// The kernel weight of a voxel centre at squared distance d2 (in units of r²) from the ball
 /// centre, d2 ≤ 1.
 double kernel_weight(IntegralInvariantKernel kernel, double d2) {
@@ -56,23 +60,6 @@ double kernel_weight(IntegralInvariantKernel kernel, double d2) {
     const double q = 1.0 - d2;  // biweight (1 − |x−c|²/r²)²: continuous, zero on the sphere
     return q * q;
 }
-
-/// Weighted sums over a prefix of a stencil row: Σ w, Σ w·t, Σ w·t².
-struct RowSums {
-    double w = 0, wt = 0, wtt = 0;
-};
-
-/// One row of a ball stencil: offsets (dj, dk), the x offsets t ∈ [t_lo, t_hi] inside the ball,
-/// and `prefix` such that prefix[i] sums t_lo … t_lo + i − 1 (t_hi − t_lo + 2 entries).
-struct StencilRow {
-    std::int32_t dj, dk, t_lo, t_hi;
-    std::int64_t prefix;  ///< index of the row's first entry in Stencil::prefix_sums
-};
-
-struct Stencil {
-    std::vector<StencilRow> rows;
-    std::vector<RowSums> prefix_sums;
-};
 
 /// Rows of lattice offsets whose voxel centre lies in B_r(c) for a surfel of direction
 /// (axis, sign), c being offset by sign·s_axis/2 along the axis from its voxel's centre, with
@@ -198,30 +185,39 @@ IntegralInvariantKernel parse_integral_invariant_kernel(const std::string& name)
     throw Error("unknown integral-invariant kernel '" + name + "' (expected ball or biweight)");
 }
 
-namespace {
+namespace detail {
 
-/// The field for one radius, from row runs built once by the caller.
-PointMatrix normals_from_runs(const BinaryVolume& volume, const RowRuns& rows, const DigitalSurface& surface,
-                              double radius, IntegralInvariantKernel kernel) {
+IntegralInvariantBall::IntegralInvariantBall(const Eigen::Vector3d& spacing, double radius, IntegralInvariantKernel kernel)
+    : spacing_(spacing), radius_(radius) {
     if (!(radius > 0) || !std::isfinite(radius))
         throw Error("integral invariant radius must be positive and finite (got " + std::to_string(radius) + ")");
-    const Eigen::Vector3d& spacing = volume.grid.spacing;
     constexpr double max_table_entries = double(1 << 25);  // 768 MiB of row sums
     if (stencil_table_entries(spacing, radius) > max_table_entries)
         throw Error("integral invariant radius " + std::to_string(radius) + " spans " +
                     std::to_string(std::lround((radius / spacing.array()).maxCoeff())) +
                     " voxels: its ball tables would exceed 768 MiB (use a radius below about 100 voxels)");
-    Stencil stencils[3][2];
     for (int axis = 0; axis < 3; ++axis)
         for (int side = 0; side < 2; ++side)
-            stencils[axis][side] = ball_stencil(spacing, axis, side ? 1 : -1, radius, kernel);
+            stencils_[axis][side] = ball_stencil(spacing, axis, side ? 1 : -1, radius, kernel);
+}
+
+Eigen::Vector3d IntegralInvariantBall::normal(const BinaryVolume& volume, const RowRuns& rows, const Surfel& s) const {
+    const LatticeMoments m = ball_moments(volume, rows, s, stencils_[s.axis][s.sign > 0 ? 1 : 0]);
+    return normal_from_moments(m, s, spacing_);
+}
+
+}  // namespace detail
+
+namespace {
+
+/// The field for one radius, from row runs built once by the caller.
+PointMatrix normals_from_runs(const BinaryVolume& volume, const RowRuns& rows, const DigitalSurface& surface,
+                              double radius, IntegralInvariantKernel kernel) {
+    const detail::IntegralInvariantBall ball(volume.grid.spacing, radius, kernel);
     PointMatrix u(surface.face_count(), 3);
 #pragma omp parallel for schedule(dynamic, 256)
-    for (std::int64_t f = 0; f < surface.face_count(); ++f) {
-        const Surfel& s = surface.surfels[std::size_t(f)];
-        const LatticeMoments m = ball_moments(volume, rows, s, stencils[s.axis][s.sign > 0 ? 1 : 0]);
-        u.row(f) = normal_from_moments(m, s, spacing).transpose();
-    }
+    for (std::int64_t f = 0; f < surface.face_count(); ++f)
+        u.row(f) = ball.normal(volume, rows, surface.surfels[std::size_t(f)]).transpose();
     return u;
 }
 
@@ -229,14 +225,14 @@ PointMatrix normals_from_runs(const BinaryVolume& volume, const RowRuns& rows, c
 
 PointMatrix integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface, double radius,
                                        IntegralInvariantKernel kernel) {
-    return normals_from_runs(volume, build_row_runs(volume), surface, radius, kernel);
+    return normals_from_runs(volume, detail::build_row_runs(volume), surface, radius, kernel);
 }
 
 PointMatrix extrapolated_integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface,
                                                     double radius, IntegralInvariantKernel kernel) {
     // n(r) = n0 + b·r² + O(r⁴) (b: the curvature variation across the ball), so with
     // r' = r/√2, 2·n(r') − n(r) = n0 + O(r⁴): Richardson extrapolation to r = 0.
-    const RowRuns rows = build_row_runs(volume);  // one pass over the volume for both radii
+    const RowRuns rows = detail::build_row_runs(volume);  // one pass over the volume for both radii
     const PointMatrix wide = normals_from_runs(volume, rows, surface, radius, kernel);
     const PointMatrix narrow = normals_from_runs(volume, rows, surface, radius / std::sqrt(2.0), kernel);
     const double agreement = std::cos(30.0 * M_PI / 180.0);
