@@ -7,7 +7,7 @@
 #include <iostream>
 #include <sstream>
 
-#include "cli_text.hpp"
+#include "dsreg/text.hpp"
 #include "dsreg/atomic_file.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"

@@ -3,19 +3,19 @@
 #include <cstdio>
 #include <iostream>
 
-#include "cli_text.hpp"
+#include "dsreg/text.hpp"
 #include "dsreg/atomic_file.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/volume_io.hpp"
-#include "output_paths.hpp"
-#include "volume_source.hpp"
+#include "dsreg/output_paths.hpp"
+#include "dsreg/pipeline.hpp"
 
 namespace dsreg::cli {
 
 namespace {
 
 struct DigitizeOptions {
-    VolumeSourceOptions source;
+    VolumeSource source;
     std::string output;
 };
 

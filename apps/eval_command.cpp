@@ -6,12 +6,12 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "cli_text.hpp"
+#include "dsreg/text.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
 #include "dsreg/mesh_io.hpp"
+#include "dsreg/pipeline.hpp"
 #include "dsreg/volume_io.hpp"
-#include "volume_source.hpp"
 
 namespace dsreg::cli {
 

@@ -1,243 +1,200 @@
+// dsreg CLI — `dsreg regularize`: the flags of the pipeline (include/dsreg/pipeline.hpp), its
+// stage lines and its summary line. Everything else happens in the library.
 #include "regularize_command.hpp"
 
 #include <unistd.h>
 
-#include <cstdio>
 #include <iostream>
-#include <nlohmann/json.hpp>
-#include <sstream>
+#include <memory>
 
-#include "cli_text.hpp"
-#include "dsreg/atomic_file.hpp"
-#include "dsreg/digital_surface.hpp"
 #include "dsreg/error.hpp"
-#include "dsreg/evaluation.hpp"
-#include "dsreg/mesh_io.hpp"
-#include "dsreg/normals_file.hpp"
-#include "dsreg/regularization.hpp"
-#include "normal_field.hpp"
-#include "output_paths.hpp"
-#include "regularization_options.hpp"
-#include "stage_clock.hpp"
-#include "volume_source.hpp"
+#include "dsreg/pipeline.hpp"
+#include "dsreg/regularization_metrics.hpp"
+#include "dsreg/text.hpp"
 
 namespace dsreg::cli {
 
 namespace {
 
-struct RegularizeOptions {
-    VolumeSourceOptions source;
-    int connectivity = 26;
-    NormalFieldOptions normals;
-    double alpha = 1e-3, beta = 1.0, gamma = 1e-2;
+/// What the command line holds beyond the library's option structs.
+struct CliFlags {
+    std::vector<CLI::Option*> at_only;  ///< flags that apply only to --normals at
+    std::string at_epsilon = "2:0.25";  ///< --at-eps ε1:ε2 (or a single ε)
+    std::vector<std::int64_t> raw_dims;
+    std::string raw_type = "uint8";
+    bool raw_big_endian = false;
+    std::uint64_t raw_header_bytes = 0;
+    std::vector<double> spacing;
     std::string solver = "auto";
-    std::string output, input_mesh, report;
-    bool triangulate = false, quiet = false, verbose = false;
-    ExtensionOptions extensions;  ///< --clamp, --metric, local weight maps
+    int connectivity = 26;
+    bool quiet = false, verbose = false;
 };
 
-/// The output mesh: quads (or triangles) with the field u per face and, after AT, the feature
-/// map v per vertex ("v" in PLY).
-PolygonMesh make_mesh(const DigitalSurface& surface, const PointMatrix& positions, const NormalField& field,
-                      bool triangulate) {
-    PolygonMesh mesh;
-    mesh.vertices = positions;
-    mesh.faces = surface.quads;
-    mesh.face_normals = field.normals;
-    if (field.at) mesh.vertex_scalars.emplace_back("v", field.at->features);
-    return triangulate ? triangulate_shorter_diagonal(mesh) : mesh;
+struct RegularizeCommand {
+    VolumeSource source;
+    PipelineOptions options;
+    PipelineOutputs outputs;
+    CliFlags flags;
+};
+
+void add_volume_source_options(CLI::App& command, VolumeSource& o, CliFlags& flags) {
+    command.add_option("input", o.input_path, "Volume file: .vol .longvol .pgm3d .raw");
+    command.add_option("--shape", o.shape,
+                       "Implicit shape instead of a file: a named shape (sphere1 sphere9 ellipsoid cylinder torus "
+                       "rcube goursat goursat-hole distel leopold diabolo heart crixxi) or a polynomial such as "
+                       "\"x^2+y^2+z^2-25\" (F <= 0 inside)");
+    command.add_option("--h", o.h, "Grid step for --shape, physical units (default: 1/64 of the shape's extent)");
+    command.add_option("--box", o.box, "Half-size of the domain of a polynomial --shape")->capture_default_str();
+    command.add_option("--min", o.min_value, "Object = voxels with value >= MIN (default: value > 0)");
+    command.add_option("--max", o.max_value, "Object = voxels with value <= MAX");
+    command.add_option("--raw-dims", flags.raw_dims, "Dimensions X,Y,Z of a .raw volume")->expected(3)->delimiter(',');
+    command.add_option("--raw-type", flags.raw_type, "Voxel type of a .raw volume: uint8 int8 uint16 int16 uint32 int32 "
+                                                     "uint64 int64 float32 float64")
+        ->capture_default_str();
+    command.add_flag("--raw-big-endian", flags.raw_big_endian, "Values of the .raw volume are big-endian");
+    command.add_option("--raw-header-bytes", flags.raw_header_bytes, "Bytes to skip at the start of the .raw volume");
+    command.add_option("--spacing", flags.spacing, "Voxel size SX,SY,SZ in physical units (overrides the file's)")
+        ->expected(3)
+        ->delimiter(',');
+    command.add_option("--max-voxels", o.max_voxels, "Refuse volumes with more voxels than this")->capture_default_str();
+    command.add_option("--max-memory", o.max_memory,
+                       "Refuse runs whose estimated peak memory exceeds this, e.g. 4G, 512M (K/M/G/T: powers of 1024)");
 }
 
-nlohmann::json energy_json(const EnergyTerms& e, const RegularizationWeights& w) {
-    return {{"data", e.data}, {"alignment", e.alignment}, {"fairness", e.fairness}, {"total", e.total(w)}};
-}
-
-void check_options(RegularizeOptions& o) {
-    check_mesh_output_path("-o", o.output);
-    if (!o.input_mesh.empty()) check_mesh_output_path("--input-mesh", o.input_mesh);
-    if (!o.report.empty()) check_output_folder("--report", o.report);
-    check_normal_field_options(o.normals, !o.source.shape.empty());
-    check_distinct_outputs({{"-o", o.output},
-                            {"--input-mesh", o.input_mesh},
-                            {"--report", o.report},
-                            {"--export-normals", o.normals.export_path},
-                            {"--features", o.normals.features_path}});
-    parse_solver_kind(o.solver);
-    if (!o.source.max_memory.empty()) parse_memory_size("--max-memory", o.source.max_memory);
-    // The library checks the weights too; here the message names the option as it was typed.
-    const auto check_weight = [](const char* option, double value, bool zero_allowed) {
-        if ((zero_allowed ? value >= 0 : value > 0) && std::isfinite(value)) return;
-        throw Error(std::string(option) + " " + format("%g", value) + ": must be " +
-                    (zero_allowed ? "zero or positive" : "positive (the data term keeps the system positive definite)") +
-                    " and finite");
+void add_normal_field_options(CLI::App& cmd, NormalFieldOptions& o, PipelineOutputs& outputs, CliFlags& flags) {
+    cmd.add_option("--normals", o.kind,
+                       "Normal field: ii (integral invariants), trivial (voxel faces), ctrivial (trivial normals "
+                       "averaged within --radius), exact (true normals of a --shape), or at (Ambrosio-Tortorelli "
+                       "piecewise-smooth regularization of --at-input or --normals-file: keeps sharp features)")
+        ->check(CLI::IsMember({"ii", "trivial", "ctrivial", "exact", "at"}));
+    cmd.add_option("--radius", o.radius,
+                   "Radius of ii and ctrivial, physical units (default: 3·h^(1/3) for --shape; for files 3 voxels, "
+                   "or 5 voxels for ii with the biweight kernel)");
+    cmd.add_option("--ii-kernel", o.ii_kernel,
+                   "Weights of the integral-invariant ball: biweight (1 - d^2/r^2)^2, smooth, more accurate "
+                   "(docs/accuracy.md), or ball (uniform, the paper's integral invariants)")
+        ->check(CLI::IsMember({"ball", "biweight"}))
+        ->capture_default_str();
+    cmd.add_flag("--ii-extrapolate", o.ii_extrapolate,
+                 "Integral invariants at r and r/sqrt(2) combined as 2 n(r/sqrt(2)) - n(r): removes the bias that "
+                 "grows like r^2 (far more accurate on smooth shapes whose features are much larger than r; "
+                 "docs/accuracy.md). Default radius doubles");
+    cmd.add_option("--normals-file", o.file,
+                   "Read the normal field from this text file (lines 'i j k direction nx ny nz', see "
+                   "docs/ambrosio-tortorelli.md); with --normals at, the field to regularize");
+    cmd.add_option("--at-input", o.at_input, "Field that --normals at regularizes (default ii)")
+        ->check(CLI::IsMember({"ii", "trivial", "ctrivial", "exact"}));
+    flags.at_only = {
+        cmd.add_option("--at-alpha", o.at.alpha, "AT attachment weight a (grid units)")->capture_default_str(),
+        cmd.add_option("--at-lambda", o.at.lambda, "AT feature length cost lambda (grid units)")->capture_default_str(),
+        cmd.add_option("--at-eps", flags.at_epsilon, "AT epsilon from EPS1 down to EPS2, in voxels (EPS1:EPS2)")
+            ->capture_default_str(),
+        cmd.add_option("--at-eps-ratio", o.at.epsilon_ratio, "AT: epsilon is divided by this between levels (> 1)")
+            ->capture_default_str(),
+        cmd.add_option("--features", outputs.features,
+                       "Write the sharp edges found by --normals at (mesh edges with v < --feature-threshold at both "
+                       "ends) as OBJ polylines"),
+        cmd.add_option("--feature-threshold", o.feature_threshold, "v below which a vertex is on a feature")
+            ->capture_default_str(),
     };
-    check_weight("--alpha", o.alpha, false);
-    check_weight("--beta", o.beta, true);
-    check_weight("--gamma", o.gamma, true);
-    RegularizationWeights weights{o.alpha, o.beta, o.gamma, {}, {}};
-    validate_weights(weights, 0, 0);
-    check_regularization_extension_options(o.extensions);
+    cmd.add_option("--export-normals", outputs.normals,
+                   "Write the normal field used (after AT, if any) in the --normals-file format");
 }
 
-void write_outputs(const RegularizeOptions& o, const DigitalSurface& surface, const NormalField& field,
-                   const RegularizationResult& result) {
-    write_mesh(o.output, make_mesh(surface, result.positions, field, o.triangulate));
-    if (!o.input_mesh.empty()) write_mesh(o.input_mesh, make_mesh(surface, surface.vertices, field, o.triangulate));
-    if (!o.normals.export_path.empty())
-        write_normals_file(o.normals.export_path, surface, field.normals, field.description);
-    write_feature_lines(o.normals, field, surface, result.positions);
+
+void add_regularization_extension_options(CLI::App& command, RegularizationExtensions& o) {
+    command.add_flag("--clamp", o.clamp,
+                     "Reversible mode: keep each vertex within --clamp-half-width voxels of its digital position on each "
+                     "axis (exact box-constrained minimizer)");
+    command.add_option("--clamp-tolerance", o.clamp_tolerance, "Relative KKT residual the clamped solve must reach")
+        ->capture_default_str();
+    command.add_option("--clamp-half-width", o.clamp_half_width,
+                       "Box half-width in voxels (0.5 = the cube of the 8 voxel centres around a vertex; below 0.5 every "
+                       "voxel centre stays strictly on its side)")
+        ->capture_default_str();
+    command.add_option("--metric", o.metric, "Metrics W0, W2: identity (paper) or area (estimated face and dual vertex areas)")
+        ->check(CLI::IsMember(metric_names()))
+        ->capture_default_str();
+    const char* map_help = " multipliers from a scalar volume on the input grid (mean of the 8 voxels around each vertex)";
+    command.add_option("--alpha-map", o.alpha_map, std::string("Per-vertex alpha") + map_help);
+    command.add_option("--beta-map", o.beta_map, std::string("Per-face beta") + map_help + "; faces: mean of their vertices");
+    command.add_option("--gamma-map", o.gamma_map, std::string("Per-vertex gamma") + map_help);
+    command.add_option("--alpha-file", o.alpha_file, "Per-vertex alpha multipliers: text file, one value per vertex in mesh order");
+    command.add_option("--beta-file", o.beta_file, "Per-face beta multipliers: text file, one value per face in mesh order");
+    command.add_option("--gamma-file", o.gamma_file, "Per-vertex gamma multipliers: text file, one value per vertex in mesh order");
 }
 
-nlohmann::json make_report(const RegularizeOptions& o, const LoadedVolume& loaded, std::int64_t object_voxels,
-                           const DigitalSurface& surface, const NormalField& field, const RegularizationResult& result,
-                           const RegularizationWeights& weights, const StageClock& clock) {
-    nlohmann::json report;
-    report["input"] = loaded.description;
-    report["grid"] = {{"dims", loaded.volume.grid.dims},
-                      {"spacing", {loaded.volume.grid.spacing.x(), loaded.volume.grid.spacing.y(), loaded.volume.grid.spacing.z()}},
-                      {"origin", {loaded.volume.grid.origin.x(), loaded.volume.grid.origin.y(), loaded.volume.grid.origin.z()}}};
-    report["counts"] = {{"voxels", loaded.volume.grid.voxel_count()},
-                        {"object_voxels", object_voxels},
-                        {"surfels", surface.face_count()},
-                        {"vertices", surface.vertex_count()},
-                        {"components", surface.component_count},
-                        {"split_pointels", surface.split_pointel_count},
-                        {"euler_characteristics", component_euler_characteristics(surface)}};
-    report["parameters"] = {{"alpha", o.alpha}, {"beta", o.beta}, {"gamma", o.gamma},
-                            {"min", o.source.min_value ? nlohmann::json(*o.source.min_value) : nlohmann::json(nullptr)},
-                            {"max", o.source.max_value ? nlohmann::json(*o.source.max_value) : nlohmann::json(nullptr)},
-                            {"connectivity", o.connectivity}, {"normals", o.normals.kind},
-                            {"normals_input", field.input},
-                            {"radius", field.radius ? nlohmann::json(*field.radius) : nlohmann::json(nullptr)},
-                            {"ii_kernel", field.ii_kernel ? nlohmann::json(*field.ii_kernel) : nlohmann::json(nullptr)},
-                            {"ii_extrapolated", field.ii_extrapolated},
-                            {"solver", result.solve.solver}, {"triangulate", o.triangulate}};
-    if (field.at) report["at"] = at_report(o.normals, field, surface);
-    report["solve"] = {{"relative_residual", result.solve.relative_residual},
-                       {"error_bound", result.solve.error_bound},
-                       {"solver", result.solve.solver},
-                       {"note", result.solve.note},
-                       {"multigrid_levels", result.solve.multigrid_levels},
-                       {"operator_complexity", result.solve.operator_complexity},
-                       {"iterations", result.solve.iterations},
-                       {"factor_nonzeros", std::int64_t(result.solve.factor_nonzeros)},
-                       {"unknowns", 3 * surface.vertex_count()}};
-    report["energy_before"] = energy_json(result.energy_before, weights);
-    report["energy_after"] = energy_json(result.energy_after, weights);
-    nlohmann::json stages = nlohmann::json::object();
-    for (const auto& [name, seconds] : clock.stage_seconds()) stages[name] = seconds;
-    stages["assembly"] = result.assembly_seconds;
-    stages["solve"] = result.solve_seconds;
-    report["seconds"] = stages;
-    report["total_seconds"] = clock.total_seconds();
-    report["peak_memory_bytes"] = peak_memory_bytes();
-    report["outputs"] = {{"mesh", o.output}, {"input_mesh", o.input_mesh},
-                         {"normals", o.normals.export_path}, {"features", o.normals.features_path}};
-    return report;
+
+/// The library's structs from the flags that the command line spells differently.
+void apply_flags(RegularizeCommand& c) {
+    CliFlags& f = c.flags;
+    RawVolumeLayout layout;
+    layout.type = parse_raw_voxel_type(f.raw_type);
+    layout.big_endian = f.raw_big_endian;
+    layout.header_bytes = f.raw_header_bytes;
+    c.options.extensions.map_raw_layout = layout;  // .raw weight maps are read like a .raw input
+    if (!f.raw_dims.empty()) {
+        layout.dims = {f.raw_dims[0], f.raw_dims[1], f.raw_dims[2]};
+        c.source.raw_layout = layout;
+    }
+    if (!f.spacing.empty()) c.source.spacing = Eigen::Vector3d(f.spacing[0], f.spacing[1], f.spacing[2]);
+    c.options.solver = parse_solver_kind(f.solver);
+    c.options.connectivity = f.connectivity == 6 ? Connectivity::Six : Connectivity::TwentySix;
+    NormalFieldOptions& normals = c.options.normals;
+    const bool at = normals.kind == "at";
+    for (const CLI::Option* option : f.at_only)
+        if (option->count() > 0 && !at) throw Error(option->get_name() + " only applies to --normals at");
+    if (at) parse_epsilon_range(f.at_epsilon, normals.at);
 }
 
-void run(RegularizeOptions& o) {
-    check_options(o);
-    const bool progress = !o.quiet && (o.verbose || isatty(STDERR_FILENO));
-    StageClock clock(progress);
+/// On stderr, as each stage ends: "dsreg: surface    0.024 s  37590 surfels, …".
+ProgressCallback stage_lines(bool shown) {
+    if (!shown) return {};
+    return [](const ProgressEvent& event) {
+        if (!event.finished) return;
+        std::cerr << "dsreg: " << event.stage << ' ' << format("%8.3f s", event.seconds)
+                  << (event.detail.empty() ? "" : "  " + event.detail) << '\n';
+    };
+}
 
-    clock.start(o.source.shape.empty() ? "read" : "digitize");
-    const LoadedVolume loaded = load_volume(o.source);
-    const std::int64_t object_voxels = loaded.volume.object_voxel_count();
-    clock.finish(std::to_string(object_voxels) + " object voxels");
-    if (object_voxels == 0 && o.source.shape.empty()) {
-        const std::string values = file_value_range(o.source);
-        throw Error(o.source.input_path + ": the object is empty: no voxel has " + object_value_range(o.source) +
-                    (values.empty() ? "" : "; " + values) + " (choose the object's values with --min and --max)");
-    }
-    if (!o.source.max_memory.empty()) {
-        // Before anything proportional to the surface is allocated: count its surfels (one pass).
-        const SolverKind kind = parse_solver_kind(o.solver);
-        check_run_memory(o.source, loaded.volume.grid.voxel_count(), count_surfels(loaded.volume),
-                         kind == SolverKind::Cholmod || kind == SolverKind::Auto);
-    }
-
-    clock.start("surface");
-    const DigitalSurface surface = extract_digital_surface(
-        loaded.volume, o.connectivity == 6 ? Connectivity::Six : Connectivity::TwentySix);
-    clock.finish(std::to_string(surface.face_count()) + " surfels, " + std::to_string(surface.vertex_count()) +
-                 " vertices, " + std::to_string(surface.component_count) +
-                 (surface.component_count == 1 ? " component" : " components"));
-
-    const NormalField field = compute_normal_field(o.normals, loaded, surface, clock);
-
-    clock.start("regularize");
-    RegularizationWeights weights{o.alpha, o.beta, o.gamma, {}, {}};
-    apply_regularization_extensions(o.extensions, o.source, surface, field.normals, weights);
-    SolverOptions solver;
-    solver.kind = parse_solver_kind(o.solver);
-    solver.max_error_voxels = kDefaultMaxErrorVoxels;  // iterative solvers: within 5e-5 voxel of the exact answer
-    nlohmann::json extension_report;
-    const RegularizationResult result =
-        run_regularization(o.extensions, loaded.volume, surface, field.normals, weights, solver, extension_report);
-    clock.finish(result.solve.solver + ", relative residual " + format("%.2e", result.solve.relative_residual));
-
-    // Faces the solve turned against their normal (where u itself points inward, e.g. on parts
-    // thinner than the integral-invariant ball): reported, since they show as creases.
-    const std::int64_t folded = count_faces_against_field(result.positions, surface.quads, field.normals);
-
-    clock.start("write");
-    write_outputs(o, surface, field, result);
-    clock.finish(o.output);
-
-    if (!o.report.empty()) {
-        nlohmann::json report = make_report(o, loaded, object_voxels, surface, field, result, weights, clock);
-        report.update(extension_report);
-        report["counts"]["faces_against_field"] = folded;
-        const std::string text = report.dump(2) + "\n";
-        write_file_atomically(o.report, [&](std::ostream& out) { out << text; });
-    }
-
-    if (!o.quiet) {
-        std::ostringstream line;
-        line << "dsreg: " << loaded.description << ": " << surface.face_count() << " surfels, " << surface.vertex_count()
-             << " vertices, " << surface.component_count << (surface.component_count == 1 ? " component" : " components")
-             << "; energy " << format("%.4g", result.energy_before.total(weights)) << " -> "
-             << format("%.4g", result.energy_after.total(weights)) << "; " << result.solve.solver << " residual "
-             << format("%.1e", result.solve.relative_residual);
-        if (folded > 0) line << "; " << folded << " faces folded against u";
-        if (field.at)
-            line << "; Ambrosio-Tortorelli " << field.at->total_rounds() << " rounds, "
-                 << (field.at->features.array() < o.normals.feature_threshold).count() << " feature vertices";
-        line << "; " << format("%.2f", clock.total_seconds()) << " s, "
-             << human_bytes(peak_memory_bytes()) << " peak -> " << o.output;
-        std::cerr << line.str() << '\n';
-    }
+void run(RegularizeCommand& c) {
+    apply_flags(c);
+    check_pipeline_options(c.options, !c.source.shape.empty());
+    check_pipeline_outputs(c.outputs);
+    const ProgressCallback progress = stage_lines(!c.flags.quiet && (c.flags.verbose || isatty(STDERR_FILENO)));
+    PipelineResult result = run_pipeline(c.source, c.options, progress);
+    write_pipeline_outputs(result, c.options, c.outputs, c.source, progress);
+    if (!c.flags.quiet) std::cerr << "dsreg: " << summary_line(result, c.options) << " -> " << c.outputs.mesh << '\n';
 }
 
 }  // namespace
 
 void add_regularize_command(CLI::App& app) {
-    auto options = std::make_shared<RegularizeOptions>();
+    auto c = std::make_shared<RegularizeCommand>();
     CLI::App* cmd = app.add_subcommand("regularize", "Regularize the digital surface of a volume into a smooth quad mesh");
-    add_volume_source_options(*cmd, options->source);
-    cmd->add_option("-o,--output", options->output, "Output mesh: .obj .off .ply (quads) or .stl (triangles)")->required();
-    cmd->add_option("--connectivity", options->connectivity,
+    add_volume_source_options(*cmd, c->source, c->flags);
+    cmd->add_option("-o,--output", c->outputs.mesh, "Output mesh: .obj .off .ply (quads) or .stl (triangles)")->required();
+    cmd->add_option("--connectivity", c->flags.connectivity,
                     "Object connectivity where voxels touch by an edge: 6 keeps them apart, 26 joins them")
         ->check(CLI::IsMember({6, 26}))
         ->capture_default_str();
-    add_normal_field_options(*cmd, options->normals);
-    add_regularization_extension_options(*cmd, options->extensions);
-    cmd->add_option("--alpha", options->alpha, "Weight of data attachment (> 0)")->capture_default_str();
-    cmd->add_option("--beta", options->beta, "Weight of normal alignment (>= 0)")->capture_default_str();
-    cmd->add_option("--gamma", options->gamma, "Weight of fairness (>= 0)")->capture_default_str();
-    cmd->add_option("--solver", options->solver,
+    add_normal_field_options(*cmd, c->options.normals, c->outputs, c->flags);
+    add_regularization_extension_options(*cmd, c->options.extensions);
+    cmd->add_option("--alpha", c->options.alpha, "Weight of data attachment (> 0)")->capture_default_str();
+    cmd->add_option("--beta", c->options.beta, "Weight of normal alignment (>= 0)")->capture_default_str();
+    cmd->add_option("--gamma", c->options.gamma, "Weight of fairness (>= 0)")->capture_default_str();
+    cmd->add_option("--solver", c->flags.solver,
                     "Linear solver: auto (cholmod for small systems and tiny alpha, else amg), cholmod (sparse "
                     "Cholesky), amg (CG preconditioned by smoothed aggregation multigrid) or cg (block-Jacobi CG); "
                     "iterative solvers stop once their error bound is below 5e-5 voxel")
         ->check(CLI::IsMember(solver_names()))
         ->capture_default_str();
-    cmd->add_flag("--triangulate", options->triangulate, "Split each quad along its shorter diagonal");
-    cmd->add_option("--input-mesh", options->input_mesh, "Also write the unregularized digital surface to this file");
-    cmd->add_option("--report", options->report, "Write counts, timings, energies and parameters as JSON");
-    cmd->add_flag("-q,--quiet", options->quiet, "Print nothing but errors");
-    cmd->add_flag("-v,--verbose", options->verbose, "Print each stage as it finishes");
-    cmd->callback([options] { run(*options); });
+    cmd->add_flag("--triangulate", c->outputs.triangulate, "Split each quad along its shorter diagonal");
+    cmd->add_option("--input-mesh", c->outputs.input_mesh, "Also write the unregularized digital surface to this file");
+    cmd->add_option("--report", c->outputs.report, "Write counts, timings, energies and parameters as JSON");
+    cmd->add_flag("-q,--quiet", c->flags.quiet, "Print nothing but errors");
+    cmd->add_flag("-v,--verbose", c->flags.verbose, "Print each stage as it finishes");
+    cmd->callback([c] { run(*c); });
 }
 
 }  // namespace dsreg::cli

@@ -6,7 +6,7 @@
 #                                    (scripts/sanitize.sh, scripts/fuzz.sh); implies --dev
 set -euo pipefail
 packages=(build-essential cmake pkg-config libeigen3-dev libsuitesparse-dev libopenblas-dev zlib1g-dev
-          libcli11-dev nlohmann-json3-dev)
+          libcli11-dev nlohmann-json3-dev libcgal-dev)
 dev=(libgtest-dev libgmock-dev libbenchmark-dev)
 for option in "$@"; do
     case $option in

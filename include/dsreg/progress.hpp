@@ -18,6 +18,8 @@ struct ProgressEvent {
     std::string stage;      ///< "read", "surface", "normals", "solve", …
     double fraction = -1;   ///< of the stage done, in [0, 1]; −1 when unknown
     std::string detail;     ///< e.g. "iteration 12, error bound 3.1e-04 voxel"; may be empty
+    bool finished = false;  ///< the stage is over: `detail` sums it up, `seconds` is its wall time
+    double seconds = 0;
 };
 
 using ProgressCallback = std::function<void(const ProgressEvent&)>;

@@ -1,11 +1,11 @@
-#include "output_paths.hpp"
+#include "dsreg/output_paths.hpp"
 
 #include <filesystem>
 
 #include "dsreg/atomic_file.hpp"
 #include "dsreg/error.hpp"
 
-namespace dsreg::cli {
+namespace dsreg {
 
 void check_output_folder(const std::string& option, const std::string& path) {
     const std::filesystem::path folder = std::filesystem::path(path).parent_path();
@@ -37,4 +37,4 @@ void check_distinct_outputs(const std::vector<std::pair<std::string, std::string
     }
 }
 
-}  // namespace dsreg::cli
+}  // namespace dsreg

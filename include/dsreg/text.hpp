@@ -1,10 +1,10 @@
-// dsreg CLI — small text helpers shared by the subcommands.
+// dsreg — small text helpers: numbers in messages, reports and command lines.
 #pragma once
 
 #include <optional>
 #include <string>
 
-namespace dsreg::cli {
+namespace dsreg {
 
 /// One number formatted with a printf pattern, e.g. format("%.2e", 1.5e-9) == "1.50e-09".
 std::string format(const char* pattern, double value);
@@ -13,4 +13,4 @@ std::string format(const char* pattern, double value);
 /// left over or there is no number at all.
 std::optional<double> parse_whole_number(const std::string& text);
 
-}  // namespace dsreg::cli
+}  // namespace dsreg

@@ -1,11 +1,12 @@
-// dsreg CLI — checks on output paths, made before any long computation.
+// dsreg — checks on output paths, made before any long computation (folders exist, formats are
+// known, no two outputs on one file).
 #pragma once
 
 #include <string>
 #include <utility>
 #include <vector>
 
-namespace dsreg::cli {
+namespace dsreg {
 
 /// Throws dsreg::Error naming `option` if `path` has no supported mesh extension or its folder
 /// does not exist.
@@ -18,4 +19,4 @@ void check_output_folder(const std::string& option, const std::string& path);
 /// paths are skipped) are the same file, which one would silently overwrite with the other.
 void check_distinct_outputs(const std::vector<std::pair<std::string, std::string>>& outputs);
 
-}  // namespace dsreg::cli
+}  // namespace dsreg

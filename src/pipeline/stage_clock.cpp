@@ -3,32 +3,25 @@
 #include <sys/resource.h>
 
 #include <cstdio>
-#include <iostream>
 
-namespace dsreg::cli {
+#include "dsreg/pipeline.hpp"
+
+namespace dsreg {
 
 void StageClock::start(const std::string& name) {
     if (!current_.empty()) finish();
     current_ = name;
     started_ = Clock::now();
+    report_progress(progress_, name, 0.0);
 }
 
 void StageClock::finish(const std::string& detail) {
     if (current_.empty()) return;
     const double seconds = std::chrono::duration<double>(Clock::now() - started_).count();
     stages_.emplace_back(current_, seconds);
-    if (verbose_) {
-        char line[64];
-        std::snprintf(line, sizeof line, "%8.3f s", seconds);
-        std::cerr << "dsreg: " << current_ << ' ' << line << (detail.empty() ? "" : "  " + detail) << '\n';
-    }
+    const std::string stage = std::move(current_);
     current_.clear();
-}
-
-double StageClock::total_seconds() const {
-    double total = 0;
-    for (const auto& stage : stages_) total += stage.second;
-    return total;
+    if (progress_) progress_(ProgressEvent{stage, 1.0, detail, true, seconds});
 }
 
 std::int64_t peak_memory_bytes() {
@@ -49,4 +42,4 @@ std::string human_bytes(double bytes) {
     return text;
 }
 
-}  // namespace dsreg::cli
+}  // namespace dsreg

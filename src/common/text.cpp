@@ -1,9 +1,9 @@
-#include "cli_text.hpp"
+#include "dsreg/text.hpp"
 
 #include <cstdio>
 #include <stdexcept>
 
-namespace dsreg::cli {
+namespace dsreg {
 
 std::string format(const char* pattern, double value) {
     char text[64];
@@ -23,4 +23,4 @@ std::optional<double> parse_whole_number(const std::string& text) {
     return value;
 }
 
-}  // namespace dsreg::cli
+}  // namespace dsreg

@@ -1,5 +1,3 @@
-#include "regularization_options.hpp"
-
 #include <cmath>
 #include <iostream>
 
@@ -8,8 +6,9 @@
 #include "dsreg/local_weights.hpp"
 #include "dsreg/regularization_metrics.hpp"
 #include "dsreg/volume_io.hpp"
+#include "pipeline_stages.hpp"
 
-namespace dsreg::cli {
+namespace dsreg {
 
 namespace {
 
@@ -21,29 +20,20 @@ struct WeightSource {
     bool per_face;             ///< beta: one value per face
 };
 
-std::vector<WeightSource> weight_sources(const ExtensionOptions& o) {
+std::vector<WeightSource> weight_sources(const RegularizationExtensions& o) {
     return {{"alpha", o.alpha_map, o.alpha_file, false},
             {"beta", o.beta_map, o.beta_file, true},
             {"gamma", o.gamma_map, o.gamma_file, false}};
 }
 
-/// The input's raw layout (type, byte order, header) with the surface grid's dimensions.
-RawVolumeLayout map_raw_layout(const VolumeSourceOptions& source, const DigitalSurface& surface) {
-    RawVolumeLayout layout;
-    layout.dims = surface.grid.dims;
-    layout.type = parse_raw_voxel_type(source.raw_type);
-    layout.big_endian = source.raw_big_endian;
-    layout.header_bytes = source.raw_header_bytes;
-    return layout;
-}
-
-Eigen::VectorXd read_multipliers(const WeightSource& w, const VolumeSourceOptions& source, const DigitalSurface& surface) {
+Eigen::VectorXd read_multipliers(const WeightSource& w, const RegularizationExtensions& o, const DigitalSurface& surface) {
     if (!w.file.empty())
         return read_values_file(w.file, w.per_face ? surface.face_count() : surface.vertex_count(),
                                 std::string(w.per_face ? "per-face " : "per-vertex ") + w.name);
     VolumeLimits limits;
-    limits.max_voxels = source.max_voxels;
-    const RawVolumeLayout layout = map_raw_layout(source, surface);
+    limits.max_voxels = o.max_voxels;
+    RawVolumeLayout layout = o.map_raw_layout;  // a .raw map: the input's value type, on the surface's grid
+    layout.dims = surface.grid.dims;
     const ScalarVolume map = read_volume_values(w.map, &layout, limits);
     const Eigen::VectorXd at_vertices = sample_at_vertices(map, surface);
     return w.per_face ? face_means(surface.quads, at_vertices) : at_vertices;
@@ -61,7 +51,7 @@ const Eigen::VectorXd& multiplier_of(const RegularizationWeights& weights, const
     return weights.vertex_gamma;
 }
 
-nlohmann::json local_weights_json(const ExtensionOptions& o, const RegularizationWeights& weights) {
+nlohmann::json local_weights_json(const RegularizationExtensions& o, const RegularizationWeights& weights) {
     nlohmann::json json = nlohmann::json::object();
     for (const WeightSource& w : weight_sources(o)) {
         const Eigen::VectorXd& values = multiplier_of(weights, w.name);
@@ -82,7 +72,7 @@ nlohmann::json energy_json(const EnergyTerms& e, const RegularizationWeights& w)
     return {{"data", e.data}, {"alignment", e.alignment}, {"fairness", e.fairness}, {"total", e.total(w)}};
 }
 
-nlohmann::json clamp_json(const ExtensionOptions& o, const ClampedRegularizationResult& r, const RegularizationWeights& w,
+nlohmann::json clamp_json(const RegularizationExtensions& o, const ClampedRegularizationResult& r, const RegularizationWeights& w,
                           const VoxelAgreement& clamped, const VoxelAgreement& unclamped) {
     const BoxQpReport& q = r.clamp.qp;
     return {{"half_width_voxels", o.clamp_half_width},
@@ -118,29 +108,7 @@ nlohmann::json clamp_json(const ExtensionOptions& o, const ClampedRegularization
 
 }  // namespace
 
-void add_regularization_extension_options(CLI::App& command, ExtensionOptions& o) {
-    command.add_flag("--clamp", o.clamp,
-                     "Reversible mode: keep each vertex within --clamp-half-width voxels of its digital position on each "
-                     "axis (exact box-constrained minimizer)");
-    command.add_option("--clamp-tolerance", o.clamp_tolerance, "Relative KKT residual the clamped solve must reach")
-        ->capture_default_str();
-    command.add_option("--clamp-half-width", o.clamp_half_width,
-                       "Box half-width in voxels (0.5 = the cube of the 8 voxel centres around a vertex; below 0.5 every "
-                       "voxel centre stays strictly on its side)")
-        ->capture_default_str();
-    command.add_option("--metric", o.metric, "Metrics W0, W2: identity (paper) or area (estimated face and dual vertex areas)")
-        ->check(CLI::IsMember(metric_names()))
-        ->capture_default_str();
-    const char* map_help = " multipliers from a scalar volume on the input grid (mean of the 8 voxels around each vertex)";
-    command.add_option("--alpha-map", o.alpha_map, std::string("Per-vertex alpha") + map_help);
-    command.add_option("--beta-map", o.beta_map, std::string("Per-face beta") + map_help + "; faces: mean of their vertices");
-    command.add_option("--gamma-map", o.gamma_map, std::string("Per-vertex gamma") + map_help);
-    command.add_option("--alpha-file", o.alpha_file, "Per-vertex alpha multipliers: text file, one value per vertex in mesh order");
-    command.add_option("--beta-file", o.beta_file, "Per-face beta multipliers: text file, one value per face in mesh order");
-    command.add_option("--gamma-file", o.gamma_file, "Per-vertex gamma multipliers: text file, one value per vertex in mesh order");
-}
-
-void check_regularization_extension_options(const ExtensionOptions& o) {
+void check_regularization_extensions(const RegularizationExtensions& o) {
     if (!(o.clamp_tolerance > 0) || !std::isfinite(o.clamp_tolerance)) throw Error("--clamp-tolerance must be positive");
     if (!(o.clamp_half_width > 0) || !std::isfinite(o.clamp_half_width)) throw Error("--clamp-half-width must be positive");
     parse_metric_kind(o.metric);
@@ -149,16 +117,16 @@ void check_regularization_extension_options(const ExtensionOptions& o) {
             throw Error(std::string("give either --") + w.name + "-map or --" + w.name + "-file, not both");
 }
 
-void apply_regularization_extensions(const ExtensionOptions& o, const VolumeSourceOptions& source, const DigitalSurface& surface,
+void apply_regularization_extensions(const RegularizationExtensions& o, const DigitalSurface& surface,
                                      const PointMatrix& normals, RegularizationWeights& weights) {
-    check_regularization_extension_options(o);
+    check_regularization_extensions(o);
     apply_metric(parse_metric_kind(o.metric), surface, normals, weights);
     for (const WeightSource& w : weight_sources(o))
-        if (!w.map.empty() || !w.file.empty()) multiplier_slot(weights, w.name) = read_multipliers(w, source, surface);
+        if (!w.map.empty() || !w.file.empty()) multiplier_slot(weights, w.name) = read_multipliers(w, o, surface);
     validate_weights(weights, surface.vertex_count(), surface.face_count());
 }
 
-RegularizationResult run_regularization(const ExtensionOptions& o, const BinaryVolume& volume, const DigitalSurface& surface,
+RegularizationResult run_regularization(const RegularizationExtensions& o, const BinaryVolume& volume, const DigitalSurface& surface,
                                         const PointMatrix& normals, const RegularizationWeights& weights,
                                         const SolverOptions& solver, nlohmann::json& report) {
     report["metric"] = o.metric;
@@ -178,4 +146,4 @@ RegularizationResult run_regularization(const ExtensionOptions& o, const BinaryV
     return result;
 }
 
-}  // namespace dsreg::cli
+}  // namespace dsreg

@@ -1,4 +1,4 @@
-#include "volume_source.hpp"
+#include "dsreg/pipeline.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -8,33 +8,9 @@
 
 #include "dsreg/error.hpp"
 #include "dsreg/volume_io.hpp"
-#include "stage_clock.hpp"
+#include "dsreg/text.hpp"
 
-namespace dsreg::cli {
-
-void add_volume_source_options(CLI::App& command, VolumeSourceOptions& o) {
-    command.add_option("input", o.input_path, "Volume file: .vol .longvol .pgm3d .raw");
-    command.add_option("--shape", o.shape,
-                       "Implicit shape instead of a file: a named shape (sphere1 sphere9 ellipsoid cylinder torus "
-                       "rcube goursat goursat-hole distel leopold diabolo heart crixxi) or a polynomial such as "
-                       "\"x^2+y^2+z^2-25\" (F <= 0 inside)");
-    command.add_option("--h", o.h, "Grid step for --shape, physical units (default: 1/64 of the shape's extent)");
-    command.add_option("--box", o.box, "Half-size of the domain of a polynomial --shape")->capture_default_str();
-    command.add_option("--min", o.min_value, "Object = voxels with value >= MIN (default: value > 0)");
-    command.add_option("--max", o.max_value, "Object = voxels with value <= MAX");
-    command.add_option("--raw-dims", o.raw_dims, "Dimensions X,Y,Z of a .raw volume")->expected(3)->delimiter(',');
-    command.add_option("--raw-type", o.raw_type, "Voxel type of a .raw volume: uint8 int8 uint16 int16 uint32 int32 "
-                                                 "uint64 int64 float32 float64")
-        ->capture_default_str();
-    command.add_flag("--raw-big-endian", o.raw_big_endian, "Values of the .raw volume are big-endian");
-    command.add_option("--raw-header-bytes", o.raw_header_bytes, "Bytes to skip at the start of the .raw volume");
-    command.add_option("--spacing", o.spacing, "Voxel size SX,SY,SZ in physical units (overrides the file's)")
-        ->expected(3)
-        ->delimiter(',');
-    command.add_option("--max-voxels", o.max_voxels, "Refuse volumes with more voxels than this")->capture_default_str();
-    command.add_option("--max-memory", o.max_memory,
-                       "Refuse runs whose estimated peak memory exceeds this, e.g. 4G, 512M (K/M/G/T: powers of 1024)");
-}
+namespace dsreg {
 
 namespace {
 
@@ -44,7 +20,7 @@ constexpr double kBytesPerSurfel = 3300.0;
 constexpr double kFactorBytesPerSurfelLog = 640.0;
 
 /// The voxel count that --max-memory leaves room for (the mask alone), or max_voxels.
-std::int64_t memory_voxel_cap(const VolumeSourceOptions& o) {
+std::int64_t memory_voxel_cap(const VolumeSource& o) {
     if (o.max_memory.empty()) return o.max_voxels;
     const double bytes = static_cast<double>(parse_memory_size("--max-memory", o.max_memory));
     if (bytes <= kFixedBytes)
@@ -99,7 +75,7 @@ double estimate_run_memory(std::int64_t voxels, std::int64_t surfels, bool facto
     return bytes;
 }
 
-void check_run_memory(const VolumeSourceOptions& o, std::int64_t voxels, std::int64_t surfels, bool factorization) {
+void check_run_memory(const VolumeSource& o, std::int64_t voxels, std::int64_t surfels, bool factorization) {
     if (o.max_memory.empty()) return;
     const double limit = static_cast<double>(parse_memory_size("--max-memory", o.max_memory));
     const double estimate = estimate_run_memory(voxels, surfels, factorization);
@@ -114,22 +90,13 @@ void check_run_memory(const VolumeSourceOptions& o, std::int64_t voxels, std::in
                 ", or raise --max-memory");
 }
 
-double default_ii_radius(const LoadedVolume& loaded) {
-    if (!loaded.shape) return 3.0 * loaded.volume.grid.spacing.maxCoeff();
-    return std::min(3.0 * std::cbrt(loaded.h), (loaded.shape->upper - loaded.shape->lower).maxCoeff() / 8.0);
-}
-
 double default_grid_step(const ImplicitShape& shape) { return (shape.upper - shape.lower).maxCoeff() / 64.0; }
 
 namespace {
 
-std::string format_number(double x) {
-    std::ostringstream s;
-    s << x;
-    return s.str();
-}
+std::string format_number(double x) { return format("%g", x); }
 
-LoadedVolume digitize_shape(const VolumeSourceOptions& o) {
+LoadedVolume digitize_shape(const VolumeSource& o) {
     LoadedVolume loaded;
     if (o.h && (!(*o.h > 0) || !std::isfinite(*o.h))) throw Error("--h must be positive (got " + format_number(*o.h) + ")");
     loaded.shape = make_shape(o.shape, o.box);
@@ -148,29 +115,16 @@ LoadedVolume digitize_shape(const VolumeSourceOptions& o) {
     return loaded;
 }
 
-/// The layout of a .raw input given by the --raw-* options (unused for other formats).
-RawVolumeLayout raw_layout(const VolumeSourceOptions& o) {
-    RawVolumeLayout layout;
-    if (!o.raw_dims.empty()) {
-        layout.dims = {o.raw_dims[0], o.raw_dims[1], o.raw_dims[2]};
-        layout.type = parse_raw_voxel_type(o.raw_type);
-        layout.big_endian = o.raw_big_endian;
-        layout.header_bytes = o.raw_header_bytes;
-    }
-    return layout;
-}
-
-LoadedVolume read_file(const VolumeSourceOptions& o) {
+LoadedVolume read_file(const VolumeSource& o) {
     ValueRange range;
     if (o.min_value) range.has_min = true, range.min = *o.min_value;
     if (o.max_value) range.has_max = true, range.max = *o.max_value;
     VolumeLimits limits;
     limits.max_voxels = memory_voxel_cap(o);
     const bool memory_bound = limits.max_voxels < o.max_voxels;
-    const RawVolumeLayout layout = raw_layout(o);
     LoadedVolume loaded;
     try {
-        loaded.volume = read_volume(o.input_path, range, o.raw_dims.empty() ? nullptr : &layout, limits);
+        loaded.volume = read_volume(o.input_path, range, o.raw_layout ? &*o.raw_layout : nullptr, limits);
     } catch (const Error& error) {
         const std::string message = error.what();
         if (memory_bound && message.find("exceed the limit of") != std::string::npos)
@@ -178,37 +132,31 @@ LoadedVolume read_file(const VolumeSourceOptions& o) {
         throw;
     }
     loaded.description = o.input_path;
-    if (!o.spacing.empty()) {
-        for (double s : o.spacing)
-            if (!(s > 0) || !std::isfinite(s)) throw Error("--spacing: every voxel size must be positive and finite");
-        loaded.volume.grid.spacing = Eigen::Vector3d(o.spacing[0], o.spacing[1], o.spacing[2]);
+    if (o.spacing) {
+        if (!(o.spacing->array() > 0).all() || !o.spacing->allFinite())
+            throw Error("--spacing: every voxel size must be positive and finite");
+        loaded.volume.grid.spacing = *o.spacing;
     }
     loaded.h = loaded.volume.grid.spacing.maxCoeff();
     return loaded;
 }
 
-}  // namespace
-
-LoadedVolume load_volume(const VolumeSourceOptions& o) {
-    if (o.input_path.empty() == o.shape.empty())
-        throw Error(o.shape.empty() ? "no input: give a volume file or --shape NAME" : "give either a volume file or --shape, not both");
-    if (o.max_voxels <= 0) throw Error("--max-voxels must be positive (got " + std::to_string(o.max_voxels) + ")");
-    return o.shape.empty() ? read_file(o) : digitize_shape(o);
-}
-
-std::string object_value_range(const VolumeSourceOptions& o) {
+/// The values that make a voxel of a file part of the object, as the options give them:
+/// "value > 0", "value >= 300", "40 <= value <= 200", "0 < value <= 50".
+std::string object_value_range(const VolumeSource& o) {
     const std::string low = o.min_value ? format_number(*o.min_value) + " <= " : "0 < ";
     const std::string high = o.max_value ? " <= " + format_number(*o.max_value) : "";
     if (!o.max_value) return o.min_value ? "value >= " + format_number(*o.min_value) : "value > 0";
     return low + "value" + high;
 }
 
-std::string file_value_range(const VolumeSourceOptions& o) {
+/// "its values range from A to B" for the input file (read again, 4 bytes per voxel), or "" when
+/// that cannot be read within the limits. For messages about an empty object.
+std::string file_value_range(const VolumeSource& o) {
     try {
-        const RawVolumeLayout layout = raw_layout(o);
         VolumeLimits limits;
         limits.max_voxels = memory_voxel_cap(o);
-        const ScalarVolume values = read_volume_values(o.input_path, o.raw_dims.empty() ? nullptr : &layout, limits);
+        const ScalarVolume values = read_volume_values(o.input_path, o.raw_layout ? &*o.raw_layout : nullptr, limits);
         if (values.values.empty()) return "";
         const auto [low, high] = std::minmax_element(values.values.begin(), values.values.end());
         return "its values range from " + format_number(*low) + " to " + format_number(*high);
@@ -217,4 +165,20 @@ std::string file_value_range(const VolumeSourceOptions& o) {
     }
 }
 
-}  // namespace dsreg::cli
+}  // namespace
+
+LoadedVolume load_volume(const VolumeSource& o) {
+    if (o.input_path.empty() == o.shape.empty())
+        throw Error(o.shape.empty() ? "no input: give a volume file or --shape NAME" : "give either a volume file or --shape, not both");
+    if (o.max_voxels <= 0) throw Error("--max-voxels must be positive (got " + std::to_string(o.max_voxels) + ")");
+    if (!o.shape.empty()) return digitize_shape(o);
+    LoadedVolume loaded = read_file(o);
+    if (loaded.volume.object_voxel_count() == 0) {
+        const std::string values = file_value_range(o);
+        throw Error(o.input_path + ": the object is empty: no voxel has " + object_value_range(o) +
+                    (values.empty() ? "" : "; " + values) + " (choose the object's values with --min and --max)");
+    }
+    return loaded;
+}
+
+}  // namespace dsreg

@@ -1,0 +1,78 @@
+// dsreg — is a mesh a valid solid? Self-intersections and faces folded against the normal field
+// (docs/validity.md).
+//
+// Definition. A triangle or quad mesh is *valid* when the triangle mesh users get from it — each
+// quad (a,b,c,d) split along its shorter diagonal, exactly as `--triangulate`, the STL writer and
+// the evaluation do (triangulate_shorter_diagonal, mesh_io.hpp) — has
+//  1. no degenerate triangle (three collinear vertices, so zero area);
+//  2. no self-intersection: two triangles may meet only in what they share by index — the common
+//     edge of two triangles with two vertex indices in common, the common vertex of two
+//     triangles with one. Two triangles sharing an edge intersect if they overlap (they are
+//     coplanar and folded onto each other); two sharing a vertex intersect if they meet anywhere
+//     else; two sharing nothing intersect if they meet at all, even in one point. Vertices with
+//     distinct indices at the same position (e.g. the copies of a split pointel of the digital
+//     surface, digital_surface.hpp) therefore count as an intersection: the surface touches
+//     itself there, which a solid's boundary must not do;
+//  3. (with a field u, one vector per face, e.g. the normals the regularization aligned to) no
+//     face folded against u: every triangle of the split has a normal n with n·u_f > 0, u_f
+//     the vector of the face it comes from. A folded quad is a crease or a face turned inside
+//     out; this is stricter than count_faces_against_field (evaluation.hpp), which looks only at
+//     the mean normal of the two triangles of a quad.
+// A closed oriented 2-manifold mesh satisfying 1–2 is the boundary of a solid (it bounds a
+// region, its winding number is 0 or 1 everywhere): it can be 3D printed, tetrahedralized,
+// used in a simulation.
+//
+// The intersection test is CGAL's Polygon_mesh_processing::self_intersections (exact
+// predicates): the triangles are built into a CGAL surface mesh with the mesh's own vertex
+// indices, so adjacency is exactly "shares an index" above. All positions in any units.
+#pragma once
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "dsreg/mesh.hpp"
+
+namespace dsreg {
+
+/// What CGAL finds in a triangle mesh (indices into its rows).
+struct TriangleSelfIntersections {
+    std::vector<std::pair<std::int64_t, std::int64_t>> pairs;  ///< intersecting triangles, first < second, sorted
+    std::vector<std::int64_t> degenerate;                       ///< triangles with collinear vertices, sorted
+};
+
+/// Self-intersections of a triangle mesh (n×3 faces, any orientation, need not be closed or
+/// manifold: a triangle that cannot join the others' edge structure keeps its own copies of
+/// its vertices, so it counts as touching them). Throws dsreg::Error for faces that are not
+/// triangles, indices out of range or non-finite coordinates.
+TriangleSelfIntersections triangle_self_intersections(const PointMatrix& vertices, const FaceMatrix& triangles);
+
+struct MeshValidity {
+    std::int64_t faces = 0;                 ///< faces of the mesh (quads or triangles)
+    std::int64_t triangles = 0;             ///< triangles of its shorter-diagonal split
+    std::int64_t intersecting_pairs = 0;    ///< pairs of triangles that intersect (2 above)
+    std::int64_t degenerate_triangles = 0;  ///< (1 above)
+    std::int64_t folded_faces = 0;          ///< faces with a triangle against u (3 above; 0 without u)
+    /// Faces (rows of the input faces) with a degenerate or intersecting triangle, sorted.
+    std::vector<std::int32_t> intersecting_faces;
+    /// Faces folded against u, sorted.
+    std::vector<std::int32_t> folded;
+    double seconds = 0;  ///< wall time of the check
+
+    bool valid() const { return intersecting_pairs == 0 && degenerate_triangles == 0 && folded_faces == 0; }
+    /// Every invalid face (intersecting, degenerate or folded), sorted, each once.
+    std::vector<std::int32_t> invalid_faces() const;
+};
+
+/// Checks a triangle or quad mesh by the definition above. `field`: empty (no fold test) or one
+/// vector per face. Throws dsreg::Error for faces other than triangles or quads, indices out of
+/// range, or a field of the wrong size.
+MeshValidity check_mesh_validity(const PointMatrix& vertices, const FaceMatrix& faces, const PointMatrix& field = {});
+
+/// Faces of `faces` (triangles or quads) with a triangle of the shorter-diagonal split whose
+/// normal has a non-positive dot product with that face's row of `field` (degenerate triangles
+/// included), sorted.
+std::vector<std::int32_t> faces_folded_against_field(const PointMatrix& vertices, const FaceMatrix& faces,
+                                                     const PointMatrix& field);
+
+}  // namespace dsreg

@@ -1,0 +1,225 @@
+// dsreg — the whole pipeline in one call: volume → digital surface → normal field → regularized
+// vertices → mesh files and report.
+//
+// This is the one implementation of what `dsreg regularize` does; the command-line tool, the
+// Python module and the MPI driver are thin shells over it (they fill the option structs below
+// and print or return the result). Options mirror the command-line flags: the field `ii_kernel`
+// is the flag `--ii-kernel`, and error messages name the flags (`--radius must be positive`), so
+// every front end reports the same problem in the same words.
+//
+// Units: every length (h, box, radius, positions) is in the volume's physical units (see
+// volume.hpp); the mesh is in the grid frame of volume.hpp (origin + spacing ⊙ index).
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "dsreg/ambrosio_tortorelli.hpp"
+#include "dsreg/digital_surface.hpp"
+#include "dsreg/implicit_shape.hpp"
+#include "dsreg/mesh.hpp"
+#include "dsreg/progress.hpp"
+#include "dsreg/regularization.hpp"
+#include "dsreg/solvers.hpp"
+#include "dsreg/volume.hpp"
+#include "dsreg/volume_io.hpp"
+
+namespace dsreg {
+
+// ---------------------------------------------------------------------------------------------
+// Stage 1: where the binary volume comes from.
+
+/// A volume file or an implicit shape, and which voxels form the object.
+struct VolumeSource {
+    std::string input_path;   ///< a volume file (any format read_volume accepts), or
+    std::string shape;        ///< a named shape or a polynomial in x, y, z (F ≤ 0 inside)
+    std::optional<double> h;  ///< grid step of --shape; unset = default_grid_step
+    double box = 10;          ///< half-size of the domain of a polynomial shape
+    std::optional<double> min_value, max_value;  ///< object = MIN ≤ value ≤ MAX (default value > 0)
+    std::optional<RawVolumeLayout> raw_layout;   ///< layout of a .raw file (--raw-dims, --raw-type, …)
+    std::optional<Eigen::Vector3d> spacing;      ///< overrides the file's voxel size
+    std::int64_t max_voxels = std::int64_t(1) << 34;
+    std::string max_memory;  ///< --max-memory as given ("4G"); empty = no limit
+};
+
+/// A binary volume ready for the pipeline, with what the report says of it.
+struct LoadedVolume {
+    BinaryVolume volume;
+    std::string description;             ///< e.g. "bunny.vol" or "goursat at h=0.25"
+    std::optional<ImplicitShape> shape;  ///< set for --shape inputs
+    double h = 1;                        ///< grid step (largest spacing for files)
+};
+
+/// Reads or digitizes the volume. Honours max_voxels and max_memory before reading any payload.
+/// Throws dsreg::Error on any problem, including an empty object (naming the file's value range).
+LoadedVolume load_volume(const VolumeSource& source);
+
+/// Parses a memory size: a number of bytes with an optional suffix K, M, G or T (powers of 1024,
+/// optionally followed by "iB" or "B", any case), e.g. "4G", "512MiB", "1.5g", "1000000".
+/// Throws dsreg::Error naming `option` unless it is a positive finite size below 2^63 bytes.
+std::uint64_t parse_memory_size(const std::string& option, const std::string& text);
+
+/// The number of surfels of the object of `volume` (6-neighbour object/background voxel faces,
+/// the border counting as background), counted without building the surface: one pass over
+/// the voxels, no allocation.
+std::int64_t count_surfels(const BinaryVolume& volume);
+
+/// Estimated peak memory (bytes) of the pipeline on `voxels` voxels whose object has `surfels`
+/// surfels: a fixed 16 MiB, 1 byte per voxel (the mask), 3300 bytes per surfel (the surface, its
+/// normals, the sparse system and solver vectors) and, when a sparse Cholesky factorization may
+/// run (cholmod, auto), 640·m·log2(m) bytes for the factor (about 64·m·log2(m) nonzeros of ~10
+/// bytes). Fitted on goursat h = 0.5 … 0.125 and bunny-128 (measured peaks 105 MiB … 1.86 GiB),
+/// it overestimates by 10–30%. Local weight maps (4 bytes per voxel each) and Ambrosio–Tortorelli
+/// normals are not counted.
+double estimate_run_memory(std::int64_t voxels, std::int64_t surfels, bool factorization);
+
+/// Throws dsreg::Error if `source.max_memory` is set and the estimate above exceeds it. The
+/// message gives the estimate, the counts it is made of, and what to change.
+void check_run_memory(const VolumeSource& source, std::int64_t voxels, std::int64_t surfels, bool factorization);
+
+/// The automatic grid step of a shape: 1/64 of the largest extent of its box.
+double default_grid_step(const ImplicitShape& shape);
+
+// ---------------------------------------------------------------------------------------------
+// Stage 3: the normal field.
+
+struct NormalFieldOptions {
+    std::string kind;  ///< --normals: ii trivial ctrivial exact at; empty: ii (or the field of --normals-file)
+    std::optional<std::string> at_input;  ///< --at-input: the field g that AT regularizes (default ii)
+    std::optional<double> radius;         ///< --radius (physical units); unset = the default below
+    std::string ii_kernel = "biweight";   ///< --ii-kernel: ball or biweight
+    bool ii_extrapolate = false;          ///< --ii-extrapolate: 2·n(r/√2) − n(r)
+    std::string file;                     ///< --normals-file: g (with --normals at) or the field itself
+    AmbrosioTortorelliParameters at;      ///< --at-alpha, --at-lambda, --at-eps, --at-eps-ratio
+    double feature_threshold = 0.5;       ///< --feature-threshold: v below it marks a feature vertex
+};
+
+/// "2:0.25" → ε from 2 down to 0.25; "0.5" → 0.5 throughout (the --at-eps syntax). Throws
+/// dsreg::Error naming --at-eps.
+void parse_epsilon_range(const std::string& text, AmbrosioTortorelliParameters& at);
+
+/// Checks the options against each other and their values (before any long computation).
+/// Throws dsreg::Error naming the flag.
+void check_normal_field_options(const NormalFieldOptions& options, bool input_is_shape);
+
+/// The integral-invariant (or convolved trivial) radius used when --radius is not given: for a
+/// shape the multigrid-convergent 3·h^(1/3) (DESIGN.md), at most 1/8 of the largest side of its
+/// box (3·h^(1/3) suits shapes about 10 across; on smaller ones it would make a ball as wide as the
+/// shape); for a file 3 voxels, or 5 voxels for ii with the biweight kernel (its weights fade
+/// towards the sphere, so it needs a larger support for as little noise: docs/accuracy.md). Twice
+/// that with --ii-extrapolate, whose extrapolation removes the bias that grows with r.
+double default_field_radius(const NormalFieldOptions& options, const std::string& kind, const LoadedVolume& loaded);
+
+struct NormalField {
+    PointMatrix normals;                         ///< the field u the regularization uses
+    std::string description;                     ///< e.g. "integral invariants (biweight kernel), r = 3"
+    std::string input;                           ///< ii, trivial, ctrivial, exact or file (g for AT)
+    std::optional<double> radius;                ///< radius used, if any
+    std::optional<std::string> ii_kernel;        ///< kernel of the integral invariants, if used
+    bool ii_extrapolated = false;                ///< Richardson-extrapolated integral invariants
+    std::optional<AmbrosioTortorelliResult> at;  ///< set for --normals at
+};
+
+// ---------------------------------------------------------------------------------------------
+// Stage 4: the regularization beyond the paper's global weights.
+
+/// --clamp, --metric and local weights (regularization_metrics.hpp, local_weights.hpp,
+/// clamped_regularization.hpp).
+struct RegularizationExtensions {
+    bool clamp = false;               ///< keep each vertex in its box |p̂ − p| ≤ half-width · spacing per axis
+    double clamp_tolerance = 1e-10;   ///< relative KKT residual the clamped solve must reach
+    double clamp_half_width = 0.499;  ///< box half-width in voxels (< 0.5: docs/clamped.md)
+    std::string metric = "identity";  ///< W0, W2: identity or area
+    std::string alpha_map, beta_map, gamma_map;     ///< scalar volumes on the input grid
+    std::string alpha_file, beta_file, gamma_file;  ///< text files, one value per vertex (face for beta)
+    RawVolumeLayout map_raw_layout;  ///< value type, byte order and header of .raw maps (dims: the input's)
+    std::int64_t max_voxels = std::int64_t(1) << 34;  ///< limit for the maps
+};
+
+/// Checks what can be checked before any work. Throws dsreg::Error naming the flag.
+void check_regularization_extensions(const RegularizationExtensions& options);
+
+// ---------------------------------------------------------------------------------------------
+// The whole run.
+
+struct PipelineOptions {
+    Connectivity connectivity = Connectivity::TwentySix;  ///< --connectivity 6|26
+    NormalFieldOptions normals;
+    double alpha = 1e-3, beta = 1.0, gamma = 1e-2;  ///< --alpha --beta --gamma (eq. 1)
+    SolverKind solver = SolverKind::Auto;           ///< --solver
+    RegularizationExtensions extensions;
+};
+
+/// Checks every option of a run before any long computation. Throws dsreg::Error naming the flag.
+void check_pipeline_options(const PipelineOptions& options, bool input_is_shape);
+
+struct PipelineResult {
+    std::string input;  ///< description of the input volume
+    VoxelGrid grid;
+    std::int64_t object_voxels = 0;
+    DigitalSurface surface;
+    NormalField field;
+    RegularizationWeights weights;  ///< as used (metric and local multipliers filled in)
+    RegularizationResult regularization;
+    /// Faces the solve turned against their normal (where u itself points inward, e.g. on parts
+    /// thinner than the integral-invariant ball): reported, since they show as creases.
+    std::int64_t faces_against_field = 0;
+    nlohmann::json extension_report;  ///< "metric", "local_weights", and "clamp" with --clamp
+    std::vector<std::pair<std::string, double>> stage_seconds;  ///< wall time of each stage, in order
+};
+
+/// Surface, normals and regularization of `loaded` (stages "surface", "normals", "at",
+/// "regularize"; each reported to `progress` as it starts and ends). Checks the options first.
+/// Throws dsreg::Error.
+PipelineResult run_pipeline(const LoadedVolume& loaded, const PipelineOptions& options,
+                            const ProgressCallback& progress = {});
+
+/// The same from a file or shape: load_volume (stage "read" or "digitize"), the --max-memory
+/// check on the counted surfels, then the stages above; local weight maps are read with the
+/// source's raw layout and voxel limit.
+PipelineResult run_pipeline(const VolumeSource& source, const PipelineOptions& options,
+                            const ProgressCallback& progress = {});
+
+/// The output mesh: the regularized vertices (or the digital ones with `digital`), the quads (or
+/// triangles, split along the shorter diagonal), the field u per face and, after AT, the feature
+/// map v per vertex ("v").
+PolygonMesh result_mesh(const PipelineResult& result, bool triangulate, bool digital = false);
+
+/// Where the results go; empty paths are not written.
+struct PipelineOutputs {
+    std::string mesh;          ///< -o: .obj .off .ply .stl
+    std::string input_mesh;    ///< --input-mesh: the digital surface
+    std::string normals;       ///< --export-normals: the field u in the --normals-file format
+    std::string features;      ///< --features: AT feature lines as OBJ polylines
+    std::string report;        ///< --report: JSON
+    bool triangulate = false;  ///< --triangulate
+};
+
+/// Checks the output paths (extensions, folders, two outputs on one file) before any work.
+void check_pipeline_outputs(const PipelineOutputs& outputs);
+
+/// Writes every output (each atomically), the report last; adds the "write" stage to `result`.
+void write_pipeline_outputs(PipelineResult& result, const PipelineOptions& options, const PipelineOutputs& outputs,
+                            const VolumeSource& source, const ProgressCallback& progress = {});
+
+/// The --report content: counts, grid, parameters, solve, energies, per-stage seconds, peak
+/// memory, outputs.
+nlohmann::json pipeline_report(const PipelineResult& result, const PipelineOptions& options,
+                               const PipelineOutputs& outputs, const VolumeSource& source);
+
+/// The one-line summary the CLI prints, without the "dsreg: " prefix, e.g. "goursat at h=0.25:
+/// 37590 surfels, 37592 vertices, 1 component; energy 1382 -> 0.4711; amg residual 4.0e-09;
+/// 0.59 s, 109.1 MiB peak".
+std::string summary_line(const PipelineResult& result, const PipelineOptions& options);
+
+/// Peak resident memory of this process so far, in bytes.
+std::int64_t peak_memory_bytes();
+
+/// "1.5 GiB", "230 MiB", ...
+std::string human_bytes(double bytes);
+
+}  // namespace dsreg

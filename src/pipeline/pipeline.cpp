@@ -1,0 +1,229 @@
+// dsreg pipeline — run_pipeline and its outputs (include/dsreg/pipeline.hpp).
+#include "dsreg/pipeline.hpp"
+
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+#include "dsreg/atomic_file.hpp"
+#include "dsreg/error.hpp"
+#include "dsreg/evaluation.hpp"
+#include "dsreg/mesh_io.hpp"
+#include "dsreg/normals_file.hpp"
+#include "dsreg/text.hpp"
+#include "dsreg/output_paths.hpp"
+#include "pipeline_stages.hpp"
+#include "stage_clock.hpp"
+
+namespace dsreg {
+
+namespace {
+
+RegularizationWeights global_weights(const PipelineOptions& o) { return {o.alpha, o.beta, o.gamma, {}, {}}; }
+
+/// The weights checked with the flags' names, as typed (the library's validate_weights names the
+/// weight instead).
+void check_weight_flags(const PipelineOptions& o) {
+    const auto check = [](const char* flag, double value, bool zero_allowed) {
+        if ((zero_allowed ? value >= 0 : value > 0) && std::isfinite(value)) return;
+        throw Error(std::string(flag) + " " + format("%g", value) + ": must be " +
+                    (zero_allowed ? "zero or positive" : "positive (the data term keeps the system positive definite)") +
+                    " and finite");
+    };
+    check("--alpha", o.alpha, false);
+    check("--beta", o.beta, true);
+    check("--gamma", o.gamma, true);
+    validate_weights(global_weights(o), 0, 0);
+}
+
+std::string component_text(std::int64_t count) {
+    return std::to_string(count) + (count == 1 ? " component" : " components");
+}
+
+/// Stages 2–4 on a loaded volume; `clock` may already hold the read stage.
+PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, StageClock& clock) {
+    PipelineResult result;
+    result.input = loaded.description;
+    result.grid = loaded.volume.grid;
+    result.object_voxels = loaded.volume.object_voxel_count();
+    if (result.object_voxels == 0) throw Error(loaded.description + ": the object is empty");
+
+    clock.start("surface");
+    result.surface = extract_digital_surface(loaded.volume, o.connectivity);
+    clock.finish(std::to_string(result.surface.face_count()) + " surfels, " +
+                 std::to_string(result.surface.vertex_count()) + " vertices, " +
+                 component_text(result.surface.component_count));
+
+    result.field = compute_normal_field(o.normals, loaded, result.surface, clock);
+
+    clock.start("regularize");
+    result.weights = global_weights(o);
+    apply_regularization_extensions(o.extensions, result.surface, result.field.normals, result.weights);
+    SolverOptions solver;
+    solver.kind = o.solver;
+    solver.max_error_voxels = kDefaultMaxErrorVoxels;  // iterative solvers: within 5e-5 voxel of the exact answer
+    result.regularization = run_regularization(o.extensions, loaded.volume, result.surface, result.field.normals,
+                                               result.weights, solver, result.extension_report);
+    clock.finish(result.regularization.solve.solver + ", relative residual " +
+                 format("%.2e", result.regularization.solve.relative_residual));
+    result.faces_against_field =
+        count_faces_against_field(result.regularization.positions, result.surface.quads, result.field.normals);
+    result.stage_seconds = clock.stage_seconds();
+    return result;
+}
+
+double total_seconds(const PipelineResult& result) {
+    return std::accumulate(result.stage_seconds.begin(), result.stage_seconds.end(), 0.0,
+                           [](double sum, const auto& stage) { return sum + stage.second; });
+}
+
+nlohmann::json energy_json(const EnergyTerms& e, const RegularizationWeights& w) {
+    return {{"data", e.data}, {"alignment", e.alignment}, {"fairness", e.fairness}, {"total", e.total(w)}};
+}
+
+nlohmann::json optional_json(const std::optional<double>& value) {
+    return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
+}
+
+}  // namespace
+
+void check_pipeline_options(const PipelineOptions& o, bool input_is_shape) {
+    check_normal_field_options(o.normals, input_is_shape);
+    check_weight_flags(o);
+    check_regularization_extensions(o.extensions);
+}
+
+PipelineResult run_pipeline(const LoadedVolume& loaded, const PipelineOptions& options, const ProgressCallback& progress) {
+    check_pipeline_options(options, loaded.shape.has_value());
+    StageClock clock(progress);
+    return run_stages(loaded, options, clock);
+}
+
+PipelineResult run_pipeline(const VolumeSource& source, const PipelineOptions& options, const ProgressCallback& progress) {
+    if (!source.max_memory.empty()) parse_memory_size("--max-memory", source.max_memory);
+    check_pipeline_options(options, !source.shape.empty());
+    StageClock clock(progress);
+    clock.start(source.shape.empty() ? "read" : "digitize");
+    const LoadedVolume loaded = load_volume(source);
+    clock.finish(std::to_string(loaded.volume.object_voxel_count()) + " object voxels");
+    if (!source.max_memory.empty()) {
+        // Before anything proportional to the surface is allocated: count its surfels (one pass).
+        const bool factorization = options.solver == SolverKind::Cholmod || options.solver == SolverKind::Auto;
+        check_run_memory(source, loaded.volume.grid.voxel_count(), count_surfels(loaded.volume), factorization);
+    }
+    PipelineOptions with_maps = options;  // local weight maps are read like the input
+    if (source.raw_layout) with_maps.extensions.map_raw_layout = *source.raw_layout;
+    with_maps.extensions.max_voxels = source.max_voxels;
+    return run_stages(loaded, with_maps, clock);
+}
+
+PolygonMesh result_mesh(const PipelineResult& result, bool triangulate, bool digital) {
+    PolygonMesh mesh;
+    mesh.vertices = digital ? result.surface.vertices : result.regularization.positions;
+    mesh.faces = result.surface.quads;
+    mesh.face_normals = result.field.normals;
+    if (result.field.at) mesh.vertex_scalars.emplace_back("v", result.field.at->features);
+    return triangulate ? triangulate_shorter_diagonal(mesh) : mesh;
+}
+
+void check_pipeline_outputs(const PipelineOutputs& o) {
+    check_mesh_output_path("-o", o.mesh);
+    if (!o.input_mesh.empty()) check_mesh_output_path("--input-mesh", o.input_mesh);
+    if (!o.report.empty()) check_output_folder("--report", o.report);
+    if (!o.normals.empty()) check_output_folder("--export-normals", o.normals);
+    if (!o.features.empty()) {
+        if (file_extension(o.features) != "obj")
+            throw Error("--features " + o.features + ": the feature lines are written as OBJ polylines (use .obj)");
+        check_output_folder("--features", o.features);
+    }
+    check_distinct_outputs({{"-o", o.mesh},
+                            {"--input-mesh", o.input_mesh},
+                            {"--report", o.report},
+                            {"--export-normals", o.normals},
+                            {"--features", o.features}});
+}
+
+void write_pipeline_outputs(PipelineResult& result, const PipelineOptions& options, const PipelineOutputs& outputs,
+                            const VolumeSource& source, const ProgressCallback& progress) {
+    StageClock clock(progress);
+    clock.start("write");
+    write_mesh(outputs.mesh, result_mesh(result, outputs.triangulate));
+    if (!outputs.input_mesh.empty()) write_mesh(outputs.input_mesh, result_mesh(result, outputs.triangulate, true));
+    if (!outputs.normals.empty())
+        write_normals_file(outputs.normals, result.surface, result.field.normals, result.field.description);
+    write_feature_lines(outputs.features, options.normals, result.field, result.surface, result.regularization.positions);
+    clock.finish(outputs.mesh);
+    result.stage_seconds.push_back(clock.stage_seconds().back());
+    if (outputs.report.empty()) return;
+    const std::string text = pipeline_report(result, options, outputs, source).dump(2) + "\n";
+    write_file_atomically(outputs.report, [&](std::ostream& out) { out << text; });
+}
+
+nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o, const PipelineOutputs& outputs,
+                               const VolumeSource& source) {
+    const DigitalSurface& surface = r.surface;
+    const NormalField& field = r.field;
+    const SolveReport& solve = r.regularization.solve;
+    nlohmann::json report;
+    report["input"] = r.input;
+    report["grid"] = {{"dims", r.grid.dims},
+                      {"spacing", {r.grid.spacing.x(), r.grid.spacing.y(), r.grid.spacing.z()}},
+                      {"origin", {r.grid.origin.x(), r.grid.origin.y(), r.grid.origin.z()}}};
+    report["counts"] = {{"voxels", r.grid.voxel_count()},
+                        {"object_voxels", r.object_voxels},
+                        {"surfels", surface.face_count()},
+                        {"vertices", surface.vertex_count()},
+                        {"components", surface.component_count},
+                        {"split_pointels", surface.split_pointel_count},
+                        {"euler_characteristics", component_euler_characteristics(surface)},
+                        {"faces_against_field", r.faces_against_field}};
+    report["parameters"] = {{"alpha", o.alpha}, {"beta", o.beta}, {"gamma", o.gamma},
+                            {"min", optional_json(source.min_value)}, {"max", optional_json(source.max_value)},
+                            {"connectivity", static_cast<int>(o.connectivity)},
+                            {"normals", o.normals.kind.empty() ? (o.normals.file.empty() ? "ii" : "file") : o.normals.kind},
+                            {"normals_input", field.input},
+                            {"radius", optional_json(field.radius)},
+                            {"ii_kernel", field.ii_kernel ? nlohmann::json(*field.ii_kernel) : nlohmann::json(nullptr)},
+                            {"ii_extrapolated", field.ii_extrapolated},
+                            {"solver", solve.solver}, {"triangulate", outputs.triangulate}};
+    if (field.at) report["at"] = at_report(o.normals, field, surface);
+    report["solve"] = {{"relative_residual", solve.relative_residual},
+                       {"error_bound", solve.error_bound},
+                       {"solver", solve.solver},
+                       {"note", solve.note},
+                       {"multigrid_levels", solve.multigrid_levels},
+                       {"operator_complexity", solve.operator_complexity},
+                       {"iterations", solve.iterations},
+                       {"factor_nonzeros", std::int64_t(solve.factor_nonzeros)},
+                       {"unknowns", 3 * surface.vertex_count()}};
+    report["energy_before"] = energy_json(r.regularization.energy_before, r.weights);
+    report["energy_after"] = energy_json(r.regularization.energy_after, r.weights);
+    nlohmann::json stages = nlohmann::json::object();
+    for (const auto& [name, seconds] : r.stage_seconds) stages[name] = seconds;
+    stages["assembly"] = r.regularization.assembly_seconds;
+    stages["solve"] = r.regularization.solve_seconds;
+    report["seconds"] = stages;
+    report["total_seconds"] = total_seconds(r);
+    report["peak_memory_bytes"] = peak_memory_bytes();
+    report["outputs"] = {{"mesh", outputs.mesh}, {"input_mesh", outputs.input_mesh},
+                         {"normals", outputs.normals}, {"features", outputs.features}};
+    report.update(r.extension_report);
+    return report;
+}
+
+std::string summary_line(const PipelineResult& r, const PipelineOptions& o) {
+    const RegularizationResult& reg = r.regularization;
+    std::ostringstream line;
+    line << r.input << ": " << r.surface.face_count() << " surfels, " << r.surface.vertex_count() << " vertices, "
+         << component_text(r.surface.component_count) << "; energy " << format("%.4g", reg.energy_before.total(r.weights))
+         << " -> " << format("%.4g", reg.energy_after.total(r.weights)) << "; " << reg.solve.solver << " residual "
+         << format("%.1e", reg.solve.relative_residual);
+    if (r.faces_against_field > 0) line << "; " << r.faces_against_field << " faces folded against u";
+    if (r.field.at)
+        line << "; Ambrosio-Tortorelli " << r.field.at->total_rounds() << " rounds, "
+             << (r.field.at->features.array() < o.normals.feature_threshold).count() << " feature vertices";
+    line << "; " << format("%.2f", total_seconds(r)) << " s, " << human_bytes(double(peak_memory_bytes())) << " peak";
+    return line.str();
+}
+
+}  // namespace dsreg

@@ -1,0 +1,40 @@
+// dsreg pipeline — the stages of run_pipeline (include/dsreg/pipeline.hpp), one file each:
+// normal_field.cpp, regularization_extensions.cpp; volume_source.cpp holds stage 1.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "dsreg/pipeline.hpp"
+#include "stage_clock.hpp"
+
+namespace dsreg {
+
+/// Estimates (or reads) the input field and, for --normals at, regularizes it; stages "normals"
+/// and "at" on `clock`.
+NormalField compute_normal_field(const NormalFieldOptions& options, const LoadedVolume& loaded,
+                                 const DigitalSurface& surface, StageClock& clock);
+
+/// Writes the edges where v < threshold (AT feature lines) as OBJ polylines over `positions` to
+/// `path`, if it is set and the field is an AT field.
+void write_feature_lines(const std::string& path, const NormalFieldOptions& options, const NormalField& field,
+                         const DigitalSurface& surface, const PointMatrix& positions);
+
+/// The report's "at" object: parameters, per-ε rounds, change of v, energy, time, solves.
+nlohmann::json at_report(const NormalFieldOptions& options, const NormalField& field, const DigitalSurface& surface);
+
+/// Fills the metric (W0, W2) and the local multipliers of `weights` for this surface and normal
+/// field, reading the maps or files, then validates the weights. Throws dsreg::Error.
+void apply_regularization_extensions(const RegularizationExtensions& options, const DigitalSurface& surface,
+                                     const PointMatrix& normals, RegularizationWeights& weights);
+
+/// regularize() with `solver`, or with --clamp regularize_clamped() (CHOLMOD throughout, whatever
+/// the --solver choice). `report` receives the JSON fields of the extensions: "metric",
+/// "local_weights" and, with --clamp, "clamp" (KKT residual, constraint violation, iterations,
+/// unclamped comparison, voxel-centre classification of `volume`).
+RegularizationResult run_regularization(const RegularizationExtensions& options, const BinaryVolume& volume,
+                                        const DigitalSurface& surface, const PointMatrix& normals,
+                                        const RegularizationWeights& weights, const SolverOptions& solver,
+                                        nlohmann::json& report);
+
+}  // namespace dsreg

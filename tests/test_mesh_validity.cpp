@@ -1,0 +1,174 @@
+// Validity of a mesh (mesh_validity.hpp): CGAL's self-intersection test on constructed cases
+// whose answer is known exactly, the meaning of "shares an edge / a vertex", the fold test, and
+// clean closed surfaces.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "dsreg/digital_surface.hpp"
+#include "dsreg/error.hpp"
+#include "dsreg/evaluation.hpp"
+#include "dsreg/mesh_validity.hpp"
+#include "dsreg/normals.hpp"
+#include "test_support.hpp"
+
+namespace dsreg {
+namespace {
+
+using Pairs = std::vector<std::pair<std::int64_t, std::int64_t>>;
+
+PointMatrix points(std::initializer_list<std::array<double, 3>> rows) {
+    PointMatrix p(Eigen::Index(rows.size()), 3);
+    Eigen::Index i = 0;
+    for (const auto& r : rows) p.row(i++) << r[0], r[1], r[2];
+    return p;
+}
+
+FaceMatrix faces(std::initializer_list<std::vector<std::int32_t>> rows) {
+    FaceMatrix f(Eigen::Index(rows.size()), Eigen::Index(rows.begin()->size()));
+    Eigen::Index i = 0;
+    for (const auto& r : rows) {
+        for (std::size_t k = 0; k < r.size(); ++k) f(i, Eigen::Index(k)) = r[k];
+        ++i;
+    }
+    return f;
+}
+
+/// The closed surface of a voxel set, with its pointels as vertices (the digital surface).
+DigitalSurface voxels_surface(std::initializer_list<Index3> voxels, Connectivity connectivity = Connectivity::TwentySix) {
+    return extract_digital_surface(test::make_voxels({4, 4, 4}, voxels), connectivity);
+}
+
+TEST(SelfIntersections, TrianglePiercingOneTriangleOfASquare) {
+    // Square (0,1,2,3) of side 2 in z = 0 as triangles 0 = (0,1,2) (below the diagonal y = x)
+    // and 1 = (0,2,3); triangle 2 crosses z = 0 at x = 1.5, y = 0.5 only: it pierces triangle 0.
+    const PointMatrix p = points({{0, 0, 0}, {2, 0, 0}, {2, 2, 0}, {0, 2, 0},
+                                  {1.5, 0.5, -1}, {1.5, 0.5, 1}, {1.8, 0.2, 1}});
+    const TriangleSelfIntersections found = triangle_self_intersections(p, faces({{0, 1, 2}, {0, 2, 3}, {4, 5, 6}}));
+    EXPECT_EQ(found.pairs, (Pairs{{0, 2}}));
+    EXPECT_TRUE(found.degenerate.empty());
+}
+
+TEST(SelfIntersections, SharedEdgeCountsOnlyWhenFoldedOntoItself) {
+    // Triangles (0,1,2) and (1,0,3) share the edge 0–1.
+    const FaceMatrix pair = faces({{0, 1, 2}, {1, 0, 3}});
+    const PointMatrix flat = points({{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, -1, 0}});
+    const PointMatrix dihedral = points({{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, 0.3, 1}});
+    const PointMatrix folded = points({{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, 0.5, 0}});  // on top of the first
+    EXPECT_TRUE(triangle_self_intersections(flat, pair).pairs.empty());
+    EXPECT_TRUE(triangle_self_intersections(dihedral, pair).pairs.empty());
+    EXPECT_EQ(triangle_self_intersections(folded, pair).pairs, (Pairs{{0, 1}}));
+}
+
+TEST(SelfIntersections, SharedVertexCountsOnlyWhenTheyMeetElsewhere) {
+    // Triangles (0,1,2) and (0,3,4) share vertex 0.
+    const FaceMatrix pair = faces({{0, 1, 2}, {0, 3, 4}});
+    const PointMatrix apart = points({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0.2}, {0, -1, 0.2}});
+    // The second triangle passes through the first one's interior.
+    const PointMatrix crossing = points({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {1, 1, -1}, {1, 1, 1}});
+    EXPECT_TRUE(triangle_self_intersections(apart, pair).pairs.empty());
+    EXPECT_EQ(triangle_self_intersections(crossing, pair).pairs, (Pairs{{0, 1}}));
+}
+
+TEST(SelfIntersections, TouchingAtCoincidentVerticesOfDistinctIndicesCounts) {
+    // Vertices 0 and 3 are at the same place: the two triangles touch there without sharing it.
+    const PointMatrix p = points({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 0}, {-1, 0, 0.5}, {0, -1, 0.5}});
+    EXPECT_EQ(triangle_self_intersections(p, faces({{0, 1, 2}, {3, 4, 5}})).pairs, (Pairs{{0, 1}}));
+    // The same triangles sharing the index: no intersection.
+    EXPECT_TRUE(triangle_self_intersections(p, faces({{0, 1, 2}, {0, 4, 5}})).pairs.empty());
+}
+
+TEST(SelfIntersections, DegenerateTriangleIsReported) {
+    const PointMatrix p = points({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {5, 5, 5}, {6, 5, 5}, {5, 6, 5}});
+    const TriangleSelfIntersections found = triangle_self_intersections(p, faces({{3, 4, 5}, {0, 1, 2}}));
+    EXPECT_EQ(found.degenerate, (std::vector<std::int64_t>{1}));
+    EXPECT_TRUE(found.pairs.empty());
+}
+
+TEST(SelfIntersections, NonManifoldEdgeIsAcceptedAndItsThirdTriangleTouchesTheOthers) {
+    // Three triangles on the edge 0–1: the third cannot join the edge structure, keeps its own
+    // copies of 0 and 1, and so touches the first two along that edge.
+    const PointMatrix p = points({{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, -1, 0.1}, {0.5, 0, 1}});
+    const TriangleSelfIntersections found = triangle_self_intersections(p, faces({{0, 1, 2}, {1, 0, 3}, {0, 1, 4}}));
+    EXPECT_EQ(found.pairs, (Pairs{{0, 2}, {1, 2}}));
+}
+
+TEST(SelfIntersections, RejectsBadInput) {
+    const PointMatrix p = points({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+    EXPECT_THROW(triangle_self_intersections(p, faces({{0, 1, 3}})), Error);
+    EXPECT_THROW(triangle_self_intersections(p, faces({{0, 1, 2, 0}})), Error);
+    PointMatrix bad = p;
+    bad(1, 2) = std::nan("");
+    EXPECT_THROW(triangle_self_intersections(bad, faces({{0, 1, 2}})), Error);
+}
+
+TEST(MeshValidity, DigitalCubeAndSphereAreValid) {
+    // Flat unit squares split in two: coplanar neighbours share edges and are not intersections.
+    const DigitalSurface cube = voxels_surface({{1, 1, 1}, {2, 1, 1}, {1, 2, 1}, {2, 2, 1}});
+    const MeshValidity v = check_mesh_validity(cube.vertices, cube.quads, trivial_normals(cube));
+    EXPECT_TRUE(v.valid());
+    EXPECT_EQ(v.triangles, 2 * cube.face_count());
+
+    // A smooth closed sphere: the digital ball's vertices pushed onto the sphere of radius 6.
+    const BinaryVolume ball = test::make_ball(16, 6, 7.5);
+    const DigitalSurface surface = extract_digital_surface(ball, Connectivity::TwentySix);
+    PointMatrix on_sphere = surface.vertices;
+    const Eigen::RowVector3d centre(7.5, 7.5, 7.5);
+    for (Eigen::Index i = 0; i < on_sphere.rows(); ++i)
+        on_sphere.row(i) = centre + 6.0 * (on_sphere.row(i) - centre).normalized();
+    const PointMatrix outward = face_normals(on_sphere, surface.quads);
+    const MeshValidity sphere = check_mesh_validity(on_sphere, surface.quads, outward);
+    EXPECT_TRUE(sphere.valid()) << sphere.intersecting_pairs << " pairs, " << sphere.folded_faces << " folded";
+    EXPECT_EQ(sphere.faces, surface.face_count());
+}
+
+TEST(MeshValidity, OverlappingCubesIntersectOnExactlyTheFacesThatCross) {
+    // Unit cubes A = [−½,½]³ (the voxel at the origin; faces 0–5) and B = A + (½,½,½) (faces
+    // 6–11): A's far faces (x, y or z = ½) cross B's near faces (x, y or z = 0); no other pair meets.
+    const DigitalSurface one = voxels_surface({{0, 0, 0}});
+    PointMatrix p(2 * one.vertex_count(), 3);
+    p << one.vertices, (one.vertices.rowwise() + Eigen::RowVector3d(0.5, 0.5, 0.5));
+    FaceMatrix quads(2 * one.face_count(), 4);
+    quads << one.quads, (one.quads.array() + std::int32_t(one.vertex_count())).matrix();
+    std::vector<std::int32_t> expected;
+    for (Eigen::Index f = 0; f < one.face_count(); ++f) {
+        if (one.surfels[std::size_t(f)].sign > 0) expected.push_back(std::int32_t(f));   // A's far faces
+        if (one.surfels[std::size_t(f)].sign < 0) expected.push_back(std::int32_t(f + one.face_count()));  // B's near faces
+    }
+    std::sort(expected.begin(), expected.end());
+    const MeshValidity v = check_mesh_validity(p, quads);
+    EXPECT_FALSE(v.valid());
+    EXPECT_EQ(v.intersecting_faces, expected);
+    EXPECT_EQ(v.folded_faces, 0);  // no field given: no fold test
+}
+
+TEST(MeshValidity, EdgeTouchingVoxelsTouchThemselves) {
+    // Two voxels sharing only an edge, kept apart (6-connectivity): their digital surface has two
+    // vertices per pointel of that edge (digital_surface.hpp), at the same places, so the surface
+    // touches itself there.
+    const DigitalSurface s = voxels_surface({{1, 1, 1}, {2, 2, 1}}, Connectivity::Six);
+    ASSERT_GT(s.split_pointel_count, 0);
+    const MeshValidity v = check_mesh_validity(s.vertices, s.quads, trivial_normals(s));
+    EXPECT_GT(v.intersecting_pairs, 0);
+    EXPECT_EQ(v.folded_faces, 0);
+    EXPECT_FALSE(v.valid());
+}
+
+TEST(MeshValidity, FoldTestLooksAtEachTriangleOfTheSplit) {
+    // Quad (0,1,2,3), shorter diagonal 0–2: triangle (0,1,2) faces +z, vertex 3 is pulled across
+    // the diagonal so that (0,2,3) faces (0.5,−0.5,−0.6). Their mean normal still has a positive
+    // z, so the mean-normal count misses the fold.
+    const PointMatrix p = points({{0, 0, 0}, {3, 0, 0}, {1, 1, 0}, {1.2, 0.6, 0.5}});
+    const FaceMatrix quad = faces({{0, 1, 2, 3}});
+    const PointMatrix up = points({{0, 0, 1}});
+    ASSERT_EQ(count_faces_against_field(p, quad, up), 0);
+    EXPECT_EQ(faces_folded_against_field(p, quad, up), (std::vector<std::int32_t>{0}));
+    EXPECT_EQ(faces_folded_against_field(p, quad, PointMatrix(-up)), (std::vector<std::int32_t>{0}));
+    const PointMatrix flat = points({{0, 0, 0}, {2, 0, 0}, {2, 2, 0}, {0, 2, 0}});
+    EXPECT_TRUE(faces_folded_against_field(flat, quad, up).empty());
+    EXPECT_EQ(check_mesh_validity(flat, quad, PointMatrix(-up)).folded, (std::vector<std::int32_t>{0}));
+    EXPECT_THROW(faces_folded_against_field(flat, quad, PointMatrix(2, 3)), Error);
+}
+
+}  // namespace
+}  // namespace dsreg

@@ -1,0 +1,169 @@
+// The library's one pipeline (include/dsreg/pipeline.hpp): the same answer as the stages called
+// by hand, its progress events, interruption, option checks and outputs.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+#include "dsreg/error.hpp"
+#include "dsreg/mesh_io.hpp"
+#include "dsreg/normals.hpp"
+#include "dsreg/pipeline.hpp"
+#include "test_support.hpp"
+
+namespace dsreg {
+namespace {
+
+LoadedVolume loaded_ball() {
+    LoadedVolume loaded;
+    loaded.volume = test::make_ball(14, 5.2, 6.5);
+    loaded.description = "ball";
+    return loaded;
+}
+
+std::filesystem::path fresh_folder(const std::string& name) {
+    const std::filesystem::path folder = std::filesystem::temp_directory_path() / ("dsreg_pipeline_" + name);
+    std::filesystem::remove_all(folder);
+    std::filesystem::create_directories(folder);
+    return folder;
+}
+
+TEST(Pipeline, EqualsTheStagesCalledByHand) {
+    const LoadedVolume loaded = loaded_ball();
+    PipelineOptions options;
+    options.solver = SolverKind::Cholmod;
+    const PipelineResult result = run_pipeline(loaded, options);
+
+    const DigitalSurface surface = extract_digital_surface(loaded.volume, Connectivity::TwentySix);
+    const double radius = default_field_radius(options.normals, "ii", loaded);
+    EXPECT_DOUBLE_EQ(radius, 5.0);  // files: 5 voxels with the biweight kernel
+    const PointMatrix u = integral_invariant_normals(loaded.volume, surface, radius);
+    SolverOptions solver;
+    solver.kind = SolverKind::Cholmod;
+    const RegularizationResult expected = regularize(surface, u, RegularizationWeights{}, solver);
+
+    ASSERT_EQ(result.surface.face_count(), surface.face_count());
+    EXPECT_EQ((result.surface.quads - surface.quads).cwiseAbs().maxCoeff(), 0);
+    EXPECT_LT((result.field.normals - u).cwiseAbs().maxCoeff(), 1e-15);
+    EXPECT_LT((result.regularization.positions - expected.positions).cwiseAbs().maxCoeff(), 1e-12);
+    EXPECT_EQ(result.object_voxels, loaded.volume.object_voxel_count());
+    EXPECT_EQ(result.faces_against_field, 0);
+}
+
+TEST(Pipeline, ReportsEveryStageOnceStartedThenFinishedInOrder) {
+    std::vector<ProgressEvent> events;
+    PipelineOptions options;
+    run_pipeline(loaded_ball(), options, [&](const ProgressEvent& e) { events.push_back(e); });
+    std::vector<std::string> finished;
+    std::map<std::string, int> open;
+    for (const ProgressEvent& e : events) {
+        if (e.finished) {
+            EXPECT_EQ(open[e.stage], 1) << e.stage << " finished without starting";
+            open[e.stage] = 0;
+            finished.push_back(e.stage);
+            EXPECT_GE(e.seconds, 0.0);
+            EXPECT_EQ(e.fraction, 1.0);
+        } else if (e.fraction == 0.0 && open[e.stage] == 0) {
+            open[e.stage] = 1;
+        }
+    }
+    EXPECT_EQ(finished, (std::vector<std::string>{"surface", "normals", "regularize"}));
+}
+
+TEST(Pipeline, AnInterruptFromTheProgressCallbackStopsTheRun) {
+    VolumeSource source;
+    source.shape = "sphere9";
+    source.h = 1.0;
+    PipelineOptions options;
+    const auto interrupt_at_normals = [](const ProgressEvent& e) {
+        if (e.stage == "normals") throw Interrupted();
+    };
+    EXPECT_THROW(run_pipeline(source, options, interrupt_at_normals), Interrupted);
+}
+
+TEST(Pipeline, FromAShapeWritesTheMeshAndAReportThatDescribesIt) {
+    const std::filesystem::path folder = fresh_folder("outputs");
+    VolumeSource source;
+    source.shape = "sphere9";
+    source.h = 1.0;
+    PipelineOptions options;
+    PipelineOutputs outputs;
+    outputs.mesh = (folder / "sphere.ply").string();
+    outputs.input_mesh = (folder / "digital.obj").string();
+    outputs.report = (folder / "report.json").string();
+    check_pipeline_outputs(outputs);
+    PipelineResult result = run_pipeline(source, options);
+    write_pipeline_outputs(result, options, outputs, source);
+
+    const PolygonMesh mesh = read_mesh(outputs.mesh);
+    EXPECT_EQ(mesh.faces.rows(), result.surface.face_count());
+    EXPECT_LT((mesh.vertices - result.regularization.positions).cwiseAbs().maxCoeff(), 1e-6);  // PLY stores floats
+    const PolygonMesh digital = read_mesh(outputs.input_mesh);
+    EXPECT_LT((digital.vertices - result.surface.vertices).cwiseAbs().maxCoeff(), 1e-9);
+
+    std::ifstream in(outputs.report);
+    const nlohmann::json report = nlohmann::json::parse(in);
+    EXPECT_EQ(report["counts"]["surfels"], result.surface.face_count());
+    EXPECT_EQ(report["input"], "sphere9 at h=1");
+    EXPECT_TRUE(report["seconds"].contains("digitize"));
+    EXPECT_TRUE(report["seconds"].contains("write"));
+    EXPECT_DOUBLE_EQ(report["energy_after"]["total"].get<double>(),
+                     result.regularization.energy_after.total(result.weights));
+    EXPECT_LT(result.regularization.energy_after.total(result.weights),
+              result.regularization.energy_before.total(result.weights));
+    EXPECT_NE(summary_line(result, options).find(std::to_string(result.surface.face_count()) + " surfels"),
+              std::string::npos);
+}
+
+TEST(Pipeline, OptionsAreCheckedWithTheFlagsNames) {
+    const auto message = [](const PipelineOptions& options) {
+        try {
+            run_pipeline(loaded_ball(), options);
+        } catch (const Error& e) {
+            return std::string(e.what());
+        }
+        return std::string();
+    };
+    PipelineOptions options;
+    options.alpha = 0;
+    EXPECT_NE(message(options).find("--alpha 0: must be positive"), std::string::npos);
+    options = {};
+    options.normals.radius = -1;
+    EXPECT_NE(message(options).find("--radius"), std::string::npos);
+    options = {};
+    options.normals.kind = "exact";
+    EXPECT_NE(message(options).find("needs an implicit --shape"), std::string::npos);
+    options = {};
+    options.normals.kind = "wavy";
+    EXPECT_NE(message(options).find("--normals wavy"), std::string::npos);
+    options = {};
+    options.normals.at_input = "trivial";
+    EXPECT_NE(message(options).find("--at-input only applies"), std::string::npos);
+}
+
+TEST(Pipeline, EmptyMaskIsRejectedWithItsDescription) {
+    LoadedVolume loaded;
+    loaded.volume = test::make_voxels({4, 4, 4}, {});
+    loaded.description = "an empty array";
+    try {
+        run_pipeline(loaded, PipelineOptions{});
+        FAIL() << "an empty object was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("an empty array: the object is empty"), std::string::npos);
+    }
+}
+
+TEST(Pipeline, TwoOutputsOnOneFileAreRejectedBeforeAnyWork) {
+    const std::filesystem::path folder = fresh_folder("same");
+    PipelineOutputs outputs;
+    outputs.mesh = (folder / "a.obj").string();
+    outputs.report = (folder / "." / "a.obj").string();
+    EXPECT_THROW(check_pipeline_outputs(outputs), Error);
+    outputs.report.clear();
+    outputs.mesh = (folder / "a.xyz").string();
+    EXPECT_THROW(check_pipeline_outputs(outputs), Error);
+}
+
+}  // namespace
+}  // namespace dsreg
