@@ -10,6 +10,7 @@
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
 #include "dsreg/mesh_io.hpp"
+#include "dsreg/mesh_validity.hpp"
 #include "dsreg/pipeline.hpp"
 #include "dsreg/volume_io.hpp"
 
@@ -21,6 +22,7 @@ struct EvalOptions {
     std::string mesh;
     TruthShapeOptions truth;
     std::string volume;  ///< --volume: classify the voxel centres of this file instead
+    bool voxel_coordinates = false;  ///< --voxel-coordinates: the mesh is in the digitization's voxel frame
     std::optional<double> min_value, max_value;
     std::optional<double> h;
     std::optional<double> wall_margin;
@@ -63,6 +65,26 @@ void print_classification(std::ostream& out, const VoxelClassification& c, const
         << format("%.4f", 100.0 * c.object_share()) << " %\n";
     out << "    next to the surface   " << c.boundary_correct << " / " << c.boundary_total << " = "
         << format("%.4f", 100.0 * c.boundary_share()) << " %\n";
+}
+
+/// Self-intersections and degenerate triangles of the mesh (mesh_validity.hpp) and, when it
+/// carries one vector per face (a PLY written by dsreg: the field u), the faces folded against it.
+MeshValidity mesh_validity(const PolygonMesh& mesh) {
+    return check_mesh_validity(mesh.vertices, mesh.faces, mesh.face_normals);
+}
+
+nlohmann::json validity_json(const MeshValidity& v, const PolygonMesh& mesh) {
+    return {{"intersecting_pairs", v.intersecting_pairs},
+            {"degenerate_triangles", v.degenerate_triangles},
+            {"folded_faces", mesh.face_normals.rows() > 0 ? nlohmann::json(v.folded_faces) : nlohmann::json(nullptr)},
+            {"triangles", v.triangles}};
+}
+
+void print_validity(std::ostream& out, const MeshValidity& v, const PolygonMesh& mesh) {
+    out << "  self-intersections      " << v.intersecting_pairs << " pairs of triangles, " << v.degenerate_triangles
+        << " degenerate triangles";
+    if (mesh.face_normals.rows() > 0) out << ", " << v.folded_faces << " faces folded against the mesh's field";
+    out << "\n";
 }
 
 nlohmann::json report_json(const EvalOptions& o, const ImplicitShape& shape, double h, double wall_margin,
@@ -118,26 +140,43 @@ void print_table(std::ostream& out, const EvalOptions& o, const ImplicitShape& s
 
 /// --volume: the mesh against the voxels of a file (its own coordinates: spacing 1, origin 0).
 void run_against_volume(const EvalOptions& o) {
-    if (o.h || o.wall_margin || !o.truth.shape.empty())
-        throw Error("--volume gives the truth as voxels: --shape, --h and --wall-margin do not apply");
+    if (o.h || o.wall_margin || !o.truth.shape.empty() || o.voxel_coordinates)
+        throw Error("--volume gives the truth as voxels: --shape, --h, --wall-margin and --voxel-coordinates do not apply");
     ValueRange range;
     if (o.min_value) range.has_min = true, range.min = *o.min_value;
     if (o.max_value) range.has_max = true, range.max = *o.max_value;
     const BinaryVolume volume = read_volume(o.volume, range);
     const PolygonMesh mesh = read_mesh(o.mesh);
     VoxelClassification c;
+    MeshValidity validity;
     try {
         c = classify_voxel_centres(mesh, volume);
+        validity = mesh_validity(mesh);
     } catch (const Error& e) {
         throw Error(o.mesh + ": " + e.what());
     }
     if (o.json) {
-        nlohmann::json j = {{"mesh", o.mesh}, {"volume", o.volume}, {"voxel_classification", classification_json(c)}};
+        nlohmann::json j = {{"mesh", o.mesh},
+                            {"volume", o.volume},
+                            {"voxel_classification", classification_json(c)},
+                            {"validity", validity_json(validity, mesh)}};
         std::cout << j.dump(2) << '\n';
         return;
     }
     std::cout << "dsreg eval " << o.mesh << " against the voxels of " << o.volume << "\n\n";
     print_classification(std::cout, c, o.volume);
+    print_validity(std::cout, validity, mesh);
+}
+
+/// The mesh read from --mesh, in the shape's coordinates (mapped from the voxel frame of
+/// digitize(shape, h) with --voxel-coordinates).
+PolygonMesh mesh_in_shape_frame(const EvalOptions& o, const ImplicitShape& shape, double h) {
+    PolygonMesh mesh = read_mesh(o.mesh);
+    if (!o.voxel_coordinates) return mesh;
+    const VoxelGrid grid = digitize(shape, h).grid;
+    for (Eigen::Index i = 0; i < mesh.vertices.rows(); ++i)
+        mesh.vertices.row(i) = grid.voxel_center(0, 0, 0).transpose() + mesh.vertices.row(i).cwiseProduct(grid.spacing.transpose());
+    return mesh;
 }
 
 void run(const EvalOptions& o) {
@@ -148,8 +187,8 @@ void run(const EvalOptions& o) {
     check_positive("--wall-margin", o.wall_margin, true);
     if (o.volume_cells < 8) throw Error("--volume-cells must be at least 8");
     const ImplicitShape shape = make_truth_shape(o.truth);
-    const PolygonMesh mesh = read_mesh(o.mesh);
     const double h = o.h ? *o.h : default_grid_step(shape);
+    const PolygonMesh mesh = mesh_in_shape_frame(o, shape, h);
     const double wall_margin = o.wall_margin ? *o.wall_margin : (has_clipped_axis(shape) ? 3.0 * h : 0.0);
 
     MeshEvaluationOptions options;
@@ -162,8 +201,15 @@ void run(const EvalOptions& o) {
     } catch (const Error& e) {
         throw Error(o.mesh + ": " + e.what());
     }
-    if (o.json) std::cout << report_json(o, shape, h, wall_margin, evaluation).dump(2) << '\n';
-    else print_table(std::cout, o, shape, h, wall_margin, evaluation);
+    const MeshValidity validity = mesh_validity(mesh);
+    if (o.json) {
+        nlohmann::json j = report_json(o, shape, h, wall_margin, evaluation);
+        j["validity"] = validity_json(validity, mesh);
+        std::cout << j.dump(2) << '\n';
+        return;
+    }
+    print_table(std::cout, o, shape, h, wall_margin, evaluation);
+    print_validity(std::cout, validity, mesh);
 }
 
 }  // namespace
@@ -203,6 +249,9 @@ void add_eval_command(CLI::App& app) {
     cmd->add_option("--volume", options->volume,
                     "Ground truth as voxels instead of --shape: a volume file (.vol .longvol .pgm3d); only the voxel "
                     "classification is measured, in the file's coordinates (spacing 1, origin 0, as regularize)");
+    cmd->add_flag("--voxel-coordinates", options->voxel_coordinates,
+                  "--shape: the mesh is in the voxel coordinates of the digitization at --h (a mesh made from the .vol "
+                  "of 'dsreg digitize', spacing 1, origin 0): it is mapped to the shape's coordinates first");
     cmd->add_option("--min", options->min_value, "--volume: object = voxels with value >= MIN (default: value > 0)");
     cmd->add_option("--max", options->max_value, "--volume: object = voxels with value <= MAX");
     cmd->add_option("--h", options->h,

@@ -1,59 +1,57 @@
-// dsreg — integral-invariant normals whose radius follows the object (third stage).
+// dsreg — integral-invariant normals whose radius follows the object (third stage; the default
+// field of the pipeline).
 //
 // A fixed integral-invariant (II) radius cannot serve both the thin parts of an object and its
 // thick smooth parts: where the ball reaches across a part thinner than itself (a tube, a plate,
 // a narrow gap of background) it sees both sides and the normal is wrong; where the object is
-// thick and smooth a larger ball averages out more digitization noise. Here every surfel gets
-// its own radius: no larger than the local reach of the object and of the background at the
-// surfel (from Euclidean distance transforms), as large as `max_radius` elsewhere.
-// docs/accuracy.md gives the measurements behind every choice and default.
+// thick and smooth a larger ball averages out more digitization noise, and two radii remove the
+// bias that grows with the radius. So every surfel gets its own radius
+//
+//     r = min(max_radius, max(min_radius, reach_factor · reach)),   rounded down to a level,
+//
+// `reach` being its local reach (local_reach.hpp: the smaller of the object's and the
+// background's, measured along a first field and made robust to one-voxel noise), and, where
+// r is large enough, the Richardson extrapolation 2·n(r/√2) − n(r) of the II normal, which
+// cancels its O(r²) bias. docs/accuracy.md gives the measurements behind every default.
 #pragma once
 
 #include <Eigen/Core>
 
 #include "dsreg/digital_surface.hpp"
+#include "dsreg/local_reach.hpp"
 #include "dsreg/normals.hpp"
 #include "dsreg/volume.hpp"
 
 namespace dsreg {
 
-/// Local reach of the object and of the background at every surfel, physical units. With c the
-/// surfel centre, n its (outward) direction, v its object voxel and w its background voxel:
-///  * inner reach: the largest D_bg(y) over the centres y of the object voxels met by the ray
-///    c − t·n (t ≥ 0, until it leaves the object) such that |y − v| < D_bg(y), D_bg being the
-///    distance to the nearest background voxel centre: the radius of the largest ball centred
-///    on the inward ray that holds only object voxel centres and contains v;
-///  * outer reach: the same for the background, along c + t·n, containing w.
-/// Both are at most `cap` (rays stop there) and at least the spacing (the radius of the voxel's
-/// own ball). So each is at most half the local thickness (the diameter of the largest such
-/// ball containing v, resp. w) of the object, resp. of the background.
-struct SurfelReach {
-    Eigen::VectorXd inner, outer;
-};
-SurfelReach surfel_reach(const BinaryVolume& volume, const DigitalSurface& surface, const PointMatrix& directions,
-                         double cap);
-
 struct AdaptiveNormalOptions {
     double max_radius = 0;      ///< physical units: the radius where the object is thick
-    double min_radius = 0;      ///< physical units: floor of the radius (thinnest parts)
-    double reach_factor = 1.0;  ///< r ≤ reach_factor · min(inner, outer reach)
-    int reach_passes = 1;       ///< reach recomputed along the adapted field this many more times
-    int levels_per_octave = 4;  ///< radii are rounded down to max_radius·2^(−l/levels_per_octave)
-    bool extrapolate = false;   ///< Richardson: 2·n(r/√2) − n(r) where r ≥ extrapolation_min_radius
+    double min_radius = 0;      ///< physical units: the floor of the radius (the thinnest parts)
+    double reach_factor = 1.0;  ///< r ≤ reach_factor · reach (where above min_radius)
+    int reach_rings = 3;        ///< reach made robust: the largest within this many rings (local_reach.hpp)
+    double reach_cap = 0;       ///< the reach is measured up to this (physical); at least max_radius/reach_factor + 1 voxel
+    int levels_per_octave = 4;  ///< radii are rounded down to max_radius·2^(−l/levels_per_octave), l ≥ 0
+    bool extrapolate = true;    ///< Richardson extrapolation where r ≥ extrapolation_min_radius
     double extrapolation_min_radius = 0;      ///< physical units
-    double extrapolation_agreement_deg = 30;  ///< faces whose two scales differ more keep n(r/√2)
-    double extrapolation_threshold_deg = 0;   ///< soft threshold on the correction: below it, n(r)
+    double extrapolation_agreement_deg = 30;  ///< where n(r) and n(r/√2) differ more: keep n(r/√2)
+    double extrapolation_threshold_deg = 0.5; ///< correction shrunk by this (soft threshold: noise)
     IntegralInvariantKernel kernel = IntegralInvariantKernel::biweight;
 };
 
 struct AdaptiveNormalField {
-    PointMatrix normals;    ///< m×3, outward unit normals
-    Eigen::VectorXd radius;  ///< the II radius each surfel used (physical units; the wider one if extrapolated)
-    SurfelReach reach;      ///< the reach the radii were chosen from
+    PointMatrix normals;     ///< m×3, outward unit normals
+    Eigen::VectorXd radius;  ///< the II radius of each surfel (physical; the wider one where extrapolated)
+    Eigen::VectorXd extrapolated;  ///< 1 where the field is extrapolated, else 0
+    SurfelReach reach;       ///< the robust reach the radii come from
+    double reach_cap = 0;    ///< up to which it was measured (physical units)
 };
 
-/// The adaptive field. Throws dsreg::Error for radii that are not positive and finite or with
-/// min_radius > max_radius.
+/// The adaptive field. Steps: II at the narrow radius of the thick parts, max_radius/√2, on every
+/// surfel (the first field); the reach along it (cap max_radius/reach_factor + one voxel); II at
+/// each surfel's radius; the narrow radius where missing and the extrapolation. Cost: about that
+/// of extrapolated_integral_invariant_normals at max_radius plus two distance transforms.
+/// Throws dsreg::Error for radii that are not positive and finite, min_radius > max_radius, a
+/// reach factor that is not positive, or fewer than two levels per octave.
 AdaptiveNormalField adaptive_integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface,
                                                         const AdaptiveNormalOptions& options);
 

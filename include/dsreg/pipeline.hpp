@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "dsreg/adaptive_normals.hpp"
 #include "dsreg/ambrosio_tortorelli.hpp"
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/implicit_shape.hpp"
@@ -90,7 +91,8 @@ double default_grid_step(const ImplicitShape& shape);
 struct NormalFieldOptions {
     std::string kind;  ///< --normals: ii trivial ctrivial exact at; empty: ii (or the field of --normals-file)
     std::optional<std::string> at_input;  ///< --at-input: the field g that AT regularizes (default ii)
-    std::optional<double> radius;         ///< --radius (physical units); unset = the default below
+    std::optional<double> radius;         ///< --radius (physical units): a fixed radius; unset = adaptive
+    std::optional<double> max_radius;     ///< --ii-max-radius (physical units) of the adaptive field
     std::string ii_kernel = "biweight";   ///< --ii-kernel: ball or biweight
     bool ii_extrapolate = false;          ///< --ii-extrapolate: 2·n(r/√2) − n(r)
     std::string file;                     ///< --normals-file: g (with --normals at) or the field itself
@@ -106,7 +108,13 @@ void parse_epsilon_range(const std::string& text, AmbrosioTortorelliParameters& 
 /// Throws dsreg::Error naming the flag.
 void check_normal_field_options(const NormalFieldOptions& options, bool input_is_shape);
 
-/// The integral-invariant (or convolved trivial) radius used when --radius is not given: for a
+/// The default field, `--normals ii` without --radius or --ii-extrapolate, is the adaptive one
+/// (adaptive_normals.hpp) with these radii (physical units): the largest 10 voxels (--ii-max-radius),
+/// the smallest 2 voxels, extrapolated from 6 voxels up; voxel = the largest spacing.
+AdaptiveNormalOptions default_adaptive_options(const NormalFieldOptions& options, const LoadedVolume& loaded);
+
+/// The integral-invariant (or convolved trivial) radius used when --radius is not given (and the
+/// field is not the adaptive one: --ii-extrapolate, --normals ctrivial): for a
 /// shape the multigrid-convergent 3·h^(1/3) (DESIGN.md), at most 1/8 of the largest side of its
 /// box (3·h^(1/3) suits shapes about 10 across; on smaller ones it would make a ball as wide as the
 /// shape); for a file 3 voxels, or 5 voxels for ii with the biweight kernel (its weights fade
@@ -121,6 +129,7 @@ struct NormalField {
     std::optional<double> radius;                ///< radius used, if any
     std::optional<std::string> ii_kernel;        ///< kernel of the integral invariants, if used
     bool ii_extrapolated = false;                ///< Richardson-extrapolated integral invariants
+    std::optional<AdaptiveNormalField> adaptive;  ///< set for the adaptive field (radii, reach)
     std::optional<AmbrosioTortorelliResult> at;  ///< set for --normals at
 };
 
@@ -134,6 +143,10 @@ struct RegularizationExtensions {
     double clamp_tolerance = 1e-10;   ///< relative KKT residual the clamped solve must reach
     double clamp_half_width = 0.499;  ///< box half-width in voxels (< 0.5: docs/clamped.md)
     std::string metric = "identity";  ///< W0, W2: identity or area
+    /// --alpha-reach: the data term is weighted max(1, (R/ρ)²) at vertices of reach ρ below R
+    /// (thin_part_alpha, local_weights.hpp); physical units; unset = 12 voxels (the largest
+    /// spacing); 0 = off. Multiplies --alpha-map / --alpha-file when both are given.
+    std::optional<double> alpha_reach;
     std::string alpha_map, beta_map, gamma_map;     ///< scalar volumes on the input grid
     std::string alpha_file, beta_file, gamma_file;  ///< text files, one value per vertex (face for beta)
     RawVolumeLayout map_raw_layout;  ///< value type, byte order and header of .raw maps (dims: the input's)

@@ -59,6 +59,16 @@ PointMatrix estimate_input_field(const NormalFieldOptions& o, const LoadedVolume
         field.description = "file " + o.file;
         return read_normals_file(o.file, surface);
     }
+    if (kind == "ii" && !o.radius && !o.ii_extrapolate) {
+        const AdaptiveNormalOptions adaptive = default_adaptive_options(o, loaded);
+        field.ii_kernel = o.ii_kernel;
+        field.adaptive = adaptive_integral_invariant_normals(loaded.volume, surface, adaptive);
+        const Eigen::VectorXd& r = field.adaptive->radius;
+        field.description = "adaptive integral invariants (" + o.ii_kernel + " kernel), r = " + format("%g", r.minCoeff()) +
+                            " to " + format("%g", r.maxCoeff()) + " (mean " + format("%.3g", r.mean()) + "), " +
+                            format("%.1f", 100.0 * field.adaptive->extrapolated.mean()) + " % extrapolated";
+        return field.adaptive->normals;
+    }
     if (kind == "ii" || kind == "ctrivial") {
         field.radius = o.radius ? *o.radius : default_field_radius(o, kind, loaded);
         const std::string r = ", r = " + format("%g", *field.radius);
@@ -103,6 +113,17 @@ std::string at_stage_detail(const AmbrosioTortorelliResult& r, double threshold)
 
 }  // namespace
 
+AdaptiveNormalOptions default_adaptive_options(const NormalFieldOptions& o, const LoadedVolume& loaded) {
+    const double voxel = loaded.volume.grid.spacing.maxCoeff();
+    AdaptiveNormalOptions adaptive;
+    adaptive.max_radius = o.max_radius ? *o.max_radius : 10.0 * voxel;
+    adaptive.min_radius = std::min(2.0 * voxel, adaptive.max_radius);
+    adaptive.extrapolation_min_radius = 6.0 * voxel;
+    adaptive.reach_cap = 13.0 * voxel;  // the default --alpha-reach (12 voxels) needs the reach up to there
+    adaptive.kernel = parse_integral_invariant_kernel(o.ii_kernel);
+    return adaptive;
+}
+
 double default_field_radius(const NormalFieldOptions& o, const std::string& kind, const LoadedVolume& loaded) {
     const bool ii = kind == "ii";
     const double voxel = loaded.volume.grid.spacing.maxCoeff();
@@ -128,6 +149,11 @@ void check_normal_field_options(const NormalFieldOptions& o, bool input_is_shape
     check_choices(o);
     check_combinations(o, input_is_shape);
     if (o.radius && (!(*o.radius > 0) || !std::isfinite(*o.radius))) throw Error("--radius must be positive");
+    if (o.max_radius && (!(*o.max_radius > 0) || !std::isfinite(*o.max_radius)))
+        throw Error("--ii-max-radius must be positive");
+    if (o.max_radius && (o.radius || o.ii_extrapolate || input_kind(o) != "ii"))
+        throw Error("--ii-max-radius applies to the adaptive integral invariants only (not with --radius, "
+                    "--ii-extrapolate or another field)");
     if (field_kind(o) == "at") {
         validate_at_parameters(o.at);
         if (!(o.feature_threshold > 0 && o.feature_threshold <= 1))

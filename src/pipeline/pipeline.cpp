@@ -8,6 +8,7 @@
 #include "dsreg/atomic_file.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
+#include "dsreg/local_reach.hpp"
 #include "dsreg/mesh_io.hpp"
 #include "dsreg/normals_file.hpp"
 #include "dsreg/text.hpp"
@@ -36,6 +37,18 @@ void check_weight_flags(const PipelineOptions& o) {
     validate_weights(global_weights(o), 0, 0);
 }
 
+/// The faces' reach for the thin-part data weights (empty when --alpha-reach 0): the adaptive
+/// field's, else measured along the field used.
+Eigen::VectorXd thin_part_reach(const RegularizationExtensions& o, const BinaryVolume& volume,
+                                const DigitalSurface& surface, const NormalField& field) {
+    const double reference = alpha_reach(o, volume.grid);
+    if (reference <= 0) return {};
+    const double cap = reference + volume.grid.spacing.maxCoeff();
+    if (field.adaptive && field.adaptive->reach_cap >= cap) return field.adaptive->reach.smallest();
+    SurfelReach reach = surfel_reach(volume, surface, field.normals, cap);
+    return max_over_rings(surface, reach.smallest(), AdaptiveNormalOptions{}.reach_rings);
+}
+
 std::string component_text(std::int64_t count) {
     return std::to_string(count) + (count == 1 ? " component" : " components");
 }
@@ -58,7 +71,9 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
 
     clock.start("regularize");
     result.weights = global_weights(o);
-    apply_regularization_extensions(o.extensions, result.surface, result.field.normals, result.weights);
+    apply_regularization_extensions(o.extensions, result.surface, result.field.normals,
+                                    thin_part_reach(o.extensions, loaded.volume, result.surface, result.field),
+                                    result.weights);
     SolverOptions solver;
     solver.kind = o.solver;
     solver.max_error_voxels = kDefaultMaxErrorVoxels;  // iterative solvers: within 5e-5 voxel of the exact answer
@@ -186,6 +201,19 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
                             {"ii_kernel", field.ii_kernel ? nlohmann::json(*field.ii_kernel) : nlohmann::json(nullptr)},
                             {"ii_extrapolated", field.ii_extrapolated},
                             {"solver", solve.solver}, {"triangulate", outputs.triangulate}};
+    if (field.adaptive) {
+        const AdaptiveNormalField& a = *field.adaptive;
+        report["adaptive_ii"] = {{"radius_min", a.radius.minCoeff()},
+                                 {"radius_mean", a.radius.mean()},
+                                 {"radius_max", a.radius.maxCoeff()},
+                                 {"extrapolated_share", a.extrapolated.mean()},
+                                 {"reach_min", a.reach.smallest().minCoeff()},
+                                 {"reach_cap", a.reach_cap}};
+    }
+    if (r.weights.vertex_alpha.size() > 0)
+        report["thin_part_alpha"] = {{"reference_reach", alpha_reach(o.extensions, r.grid)},
+                                     {"multiplier_max", r.weights.vertex_alpha.maxCoeff()},
+                                     {"vertices_above_one", (r.weights.vertex_alpha.array() > 1.0).count()}};
     if (field.at) report["at"] = at_report(o.normals, field, surface);
     report["solve"] = {{"relative_residual", solve.relative_residual},
                        {"error_bound", solve.error_bound},

@@ -108,7 +108,13 @@ nlohmann::json clamp_json(const RegularizationExtensions& o, const ClampedRegula
 
 }  // namespace
 
+double alpha_reach(const RegularizationExtensions& o, const VoxelGrid& grid) {
+    return o.alpha_reach ? *o.alpha_reach : 12.0 * grid.spacing.maxCoeff();
+}
+
 void check_regularization_extensions(const RegularizationExtensions& o) {
+    if (o.alpha_reach && (!(*o.alpha_reach >= 0) || !std::isfinite(*o.alpha_reach)))
+        throw Error("--alpha-reach must be zero (off) or positive");
     if (!(o.clamp_tolerance > 0) || !std::isfinite(o.clamp_tolerance)) throw Error("--clamp-tolerance must be positive");
     if (!(o.clamp_half_width > 0) || !std::isfinite(o.clamp_half_width)) throw Error("--clamp-half-width must be positive");
     parse_metric_kind(o.metric);
@@ -118,11 +124,16 @@ void check_regularization_extensions(const RegularizationExtensions& o) {
 }
 
 void apply_regularization_extensions(const RegularizationExtensions& o, const DigitalSurface& surface,
-                                     const PointMatrix& normals, RegularizationWeights& weights) {
+                                     const PointMatrix& normals, const Eigen::VectorXd& face_reach,
+                                     RegularizationWeights& weights) {
     check_regularization_extensions(o);
     apply_metric(parse_metric_kind(o.metric), surface, normals, weights);
     for (const WeightSource& w : weight_sources(o))
         if (!w.map.empty() || !w.file.empty()) multiplier_slot(weights, w.name) = read_multipliers(w, o, surface);
+    if (face_reach.size() > 0) {
+        const Eigen::VectorXd thin = thin_part_alpha(surface, face_reach, alpha_reach(o, surface.grid));
+        weights.vertex_alpha = weights.vertex_alpha.size() > 0 ? Eigen::VectorXd(weights.vertex_alpha.cwiseProduct(thin)) : thin;
+    }
     validate_weights(weights, surface.vertex_count(), surface.face_count());
 }
 
