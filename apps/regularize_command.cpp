@@ -120,6 +120,10 @@ void add_regularization_extension_options(CLI::App& command, RegularizationExten
                        "Thin parts: the data term of a vertex whose local reach rho (physical units) is below R is "
                        "weighted (R/rho)^2, so that thin tubes and plates do not shrink (docs/accuracy.md); 0 = off. "
                        "Default 12 voxels");
+    command.add_option("--shrink-correction", o.shrink_correction,
+                       "Steps of averaging of the drift of the regularized surface along u, which is then removed "
+                       "(the solve's result lies slightly inside the digital surface; docs/accuracy.md); 0 = off. "
+                       "Default 40, off with --clamp");
     command.add_option("--metric", o.metric, "Metrics W0, W2: identity (paper) or area (estimated face and dual vertex areas)")
         ->check(CLI::IsMember(metric_names()))
         ->capture_default_str();

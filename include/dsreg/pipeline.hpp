@@ -110,7 +110,8 @@ void check_normal_field_options(const NormalFieldOptions& options, bool input_is
 
 /// The default field, `--normals ii` without --radius or --ii-extrapolate, is the adaptive one
 /// (adaptive_normals.hpp) with these radii (physical units): the largest 10 voxels (--ii-max-radius),
-/// the smallest 2 voxels, extrapolated from 6 voxels up; voxel = the largest spacing.
+/// the smallest 2 voxels, 1.5 times the reach, extrapolated from 6 voxels up; voxel = the largest
+/// spacing.
 AdaptiveNormalOptions default_adaptive_options(const NormalFieldOptions& options, const LoadedVolume& loaded);
 
 /// The integral-invariant (or convolved trivial) radius used when --radius is not given (and the
@@ -147,6 +148,9 @@ struct RegularizationExtensions {
     /// (thin_part_alpha, local_weights.hpp); physical units; unset = 12 voxels (the largest
     /// spacing); 0 = off. Multiplies --alpha-map / --alpha-file when both are given.
     std::optional<double> alpha_reach;
+    /// --shrink-correction: averaging steps of correct_shrink (shrink_correction.hpp) applied to
+    /// the solve's result; unset = 40 (off with --clamp, whose boxes it could leave); 0 = off.
+    std::optional<int> shrink_correction;
     std::string alpha_map, beta_map, gamma_map;     ///< scalar volumes on the input grid
     std::string alpha_file, beta_file, gamma_file;  ///< text files, one value per vertex (face for beta)
     RawVolumeLayout map_raw_layout;  ///< value type, byte order and header of .raw maps (dims: the input's)
@@ -181,7 +185,7 @@ struct PipelineResult {
     /// Faces the solve turned against their normal (where u itself points inward, e.g. on parts
     /// thinner than the integral-invariant ball): reported, since they show as creases.
     std::int64_t faces_against_field = 0;
-    nlohmann::json extension_report;  ///< "metric", "local_weights", and "clamp" with --clamp
+    nlohmann::json extension_report;  ///< "metric", "local_weights", "shrink_correction", and "clamp" with --clamp
     std::vector<std::pair<std::string, double>> stage_seconds;  ///< wall time of each stage, in order
 };
 

@@ -118,6 +118,7 @@ AdaptiveNormalOptions default_adaptive_options(const NormalFieldOptions& o, cons
     AdaptiveNormalOptions adaptive;
     adaptive.max_radius = o.max_radius ? *o.max_radius : 10.0 * voxel;
     adaptive.min_radius = std::min(2.0 * voxel, adaptive.max_radius);
+    adaptive.reach_factor = 1.5;
     adaptive.extrapolation_min_radius = 6.0 * voxel;
     adaptive.reach_cap = 13.0 * voxel;  // the default --alpha-reach (12 voxels) needs the reach up to there
     adaptive.kernel = parse_integral_invariant_kernel(o.ii_kernel);

@@ -33,7 +33,8 @@ void apply_regularization_extensions(const RegularizationExtensions& options, co
                                      const PointMatrix& normals, const Eigen::VectorXd& face_reach,
                                      RegularizationWeights& weights);
 
-/// regularize() with `solver`, or with --clamp regularize_clamped() (CHOLMOD throughout, whatever
+/// regularize() with `solver` then correct_shrink() (--shrink-correction; the energy after is that
+/// of the corrected positions), or with --clamp regularize_clamped() (CHOLMOD throughout, whatever
 /// the --solver choice). `report` receives the JSON fields of the extensions: "metric",
 /// "local_weights" and, with --clamp, "clamp" (KKT residual, constraint violation, iterations,
 /// unclamped comparison, voxel-centre classification of `volume`).

@@ -5,6 +5,7 @@
 #include "dsreg/error.hpp"
 #include "dsreg/local_weights.hpp"
 #include "dsreg/regularization_metrics.hpp"
+#include "dsreg/shrink_correction.hpp"
 #include "dsreg/volume_io.hpp"
 #include "pipeline_stages.hpp"
 
@@ -115,6 +116,9 @@ double alpha_reach(const RegularizationExtensions& o, const VoxelGrid& grid) {
 void check_regularization_extensions(const RegularizationExtensions& o) {
     if (o.alpha_reach && (!(*o.alpha_reach >= 0) || !std::isfinite(*o.alpha_reach)))
         throw Error("--alpha-reach must be zero (off) or positive");
+    if (o.shrink_correction && *o.shrink_correction < 0) throw Error("--shrink-correction must be 0 (off) or positive");
+    if (o.shrink_correction && *o.shrink_correction > 0 && o.clamp)
+        throw Error("--shrink-correction moves vertices out of the --clamp boxes: do not combine them");
     if (!(o.clamp_tolerance > 0) || !std::isfinite(o.clamp_tolerance)) throw Error("--clamp-tolerance must be positive");
     if (!(o.clamp_half_width > 0) || !std::isfinite(o.clamp_half_width)) throw Error("--clamp-half-width must be positive");
     parse_metric_kind(o.metric);
@@ -142,7 +146,21 @@ RegularizationResult run_regularization(const RegularizationExtensions& o, const
                                         const SolverOptions& solver, nlohmann::json& report) {
     report["metric"] = o.metric;
     report["local_weights"] = local_weights_json(o, weights);
-    if (!o.clamp) return regularize(surface, normals, weights, solver);
+    if (!o.clamp) {
+        RegularizationResult result = regularize(surface, normals, weights, solver);
+        const int steps = o.shrink_correction.value_or(40);
+        if (steps == 0) return result;
+        const ShrinkCorrection correction = correct_shrink(surface, result.positions, normals, steps);
+        const EnergyTerms solved = result.energy_after;
+        result.positions = correction.positions;
+        result.energy_after = regularization_energy(result.positions, surface.vertices, surface.quads,
+                                                    vertex_links(surface.quads, surface.vertex_count()), normals, weights);
+        report["shrink_correction"] = {{"steps", steps},
+                                       {"mean_shift", correction.mean_shift},
+                                       {"max_shift", correction.max_shift},
+                                       {"energy_of_the_solve", solved.total(weights)}};
+        return result;
+    }
 
     ClampOptions clamp;  // CHOLMOD throughout: the --solver choice does not apply
     clamp.qp.tolerance = o.clamp_tolerance;
