@@ -4,11 +4,14 @@
 // u, so a part that shrinks lowers it: the minimizer ends up inside the digital surface, by an
 // amount that the data term α alone holds back (on goursat at h = 0.25 the mesh is 0.05 h inside,
 // on a leopold arm 0.2 h). A Gauss digitization is not biased that way: the surfel centres lie,
-// on average over a few voxels, on the true surface. So the correction measures, per face, the
-// offset of the regularized quad along u from its surfel centre, averages it over the surface
-// (a low-pass filter: repeated averaging with the four edge-adjacent faces, which keeps the
-// removal of the staircase, a pattern of one or two voxels, and takes only the drift), and moves
-// every vertex back along its normal by the mean of its faces' averaged offsets.
+// on average over a few voxels, on the true surface. So the correction measures, per face, how far
+// the regularized surface moved along u from the surfel centre (at the smooth surface through the
+// quad's corners: its centroid plus the sagitta that the curvature between the neighbouring faces
+// gives; the centroid alone lies inside a convex surface, by 0.08 voxel on a tube 1.5 voxels in
+// radius), averages that offset over the surface (a low-pass filter: repeated averaging with the
+// four edge-adjacent faces, which keeps the removal of the staircase, a pattern of one or two
+// voxels, and takes only the drift), and moves every vertex back along its normal by the mean of
+// its faces' averaged offsets.
 #pragma once
 
 #include "dsreg/digital_surface.hpp"
