@@ -12,7 +12,9 @@
 // `reach` being its local reach (local_reach.hpp: the smaller of the object's and the
 // background's, measured along a first field and made robust to one-voxel noise), and, where
 // r is large enough, the Richardson extrapolation 2·n(r/√2) − n(r) of the II normal, which
-// cancels its O(r²) bias. docs/accuracy.md gives the measurements behind every default.
+// cancels its O(r²) bias; where r is small (thin parts, whose small balls see few voxels and are
+// noisy), a few steps of averaging with the adjacent faces, which, unlike a larger ball, never
+// reach across the part. docs/accuracy.md gives the measurements behind every default.
 #pragma once
 
 #include <Eigen/Core>
@@ -36,6 +38,9 @@ struct AdaptiveNormalOptions {
     double extrapolation_agreement_deg = 30;  ///< where n(r) and n(r/√2) differ more: keep n(r/√2)
     double extrapolation_threshold_deg = 0.5; ///< correction shrunk by this (soft threshold: noise)
     IntegralInvariantKernel kernel = IntegralInvariantKernel::biweight;
+    int smoothing_steps = 0;      ///< steps of averaging over the adjacent faces where r < smoothing_below
+    double smoothing_below = 0;   ///< physical units
+    double smoothing_power = 2;   ///< weight of a neighbour g of f: max(0, u_f·u_g)^power
 };
 
 struct AdaptiveNormalField {

@@ -71,6 +71,52 @@ Eigen::RowVector3d extrapolated_normal(const Eigen::RowVector3d& wide, const Eig
     return (wide + (size > threshold ? (size - threshold) / size : 0.0) * correction).normalized();
 }
 
+/// The extrapolated field where the radius allows (see extrapolated_normal); `pilot` is n(r/√2)
+/// where r = max_radius.
+void extrapolate_field(const BinaryVolume& volume, const detail::RowRuns& rows, const DigitalSurface& surface,
+                       const RadiusLevels& levels, const std::vector<int>& level, const PointMatrix& pilot,
+                       int pilot_level, const AdaptiveNormalOptions& o, AdaptiveNormalField& field) {
+    const std::int64_t m = surface.face_count();
+    const int half_octave = o.levels_per_octave / 2, last = levels.count() - 1;
+    // The narrow field n(r/√2): the pilot where r = max_radius, computed where it is missing.
+    std::vector<int> missing(static_cast<std::size_t>(m), -1);
+    for (std::int64_t f = 0; f < m; ++f) {
+        const int narrow = std::min(level[std::size_t(f)] + half_octave, last);
+        if (field.radius[f] >= o.extrapolation_min_radius && narrow != pilot_level && narrow != level[std::size_t(f)])
+            missing[std::size_t(f)] = narrow;
+    }
+    const PointMatrix extra = normals_at_levels(volume, rows, surface, levels, missing, o.kernel);
+#pragma omp parallel for schedule(static)
+    for (std::int64_t f = 0; f < m; ++f) {
+        const int narrow = std::min(level[std::size_t(f)] + half_octave, last);
+        if (field.radius[f] < o.extrapolation_min_radius || narrow == level[std::size_t(f)]) continue;
+        const Eigen::RowVector3d n_narrow = missing[std::size_t(f)] >= 0 ? extra.row(f) : pilot.row(f);
+        field.normals.row(f) = extrapolated_normal(field.normals.row(f), n_narrow, o);
+        field.extrapolated[f] = 1;
+    }
+}
+
+/// Steps of averaging each normal of `smooth` with its four edge-adjacent faces, a neighbour g
+/// weighing max(0, u_f·u_g)^power (so that the field is not averaged across a sharp edge, nor
+/// across the rim of a plate).
+void smooth_field(const DigitalSurface& surface, PointMatrix& u, int steps, double power,
+                  const std::vector<std::uint8_t>& smooth) {
+    PointMatrix next = u;
+    for (int step = 0; step < steps; ++step) {
+#pragma omp parallel for schedule(static)
+        for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+            if (!smooth[std::size_t(f)]) continue;
+            Eigen::RowVector3d sum = u.row(f);
+            for (int e = 0; e < 4; ++e) {
+                const Eigen::RowVector3d g = u.row(surface.adjacent_face(f, e));
+                sum += std::pow(std::max(0.0, g.dot(u.row(f))), power) * g;
+            }
+            next.row(f) = sum.normalized();
+        }
+        u = next;
+    }
+}
+
 }  // namespace
 
 AdaptiveNormalField adaptive_integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface,
@@ -100,23 +146,11 @@ AdaptiveNormalField adaptive_integral_invariant_normals(const BinaryVolume& volu
     field.radius.resize(m);
     for (std::int64_t f = 0; f < m; ++f) field.radius[f] = levels.radius(level[std::size_t(f)]);
     field.extrapolated = Eigen::VectorXd::Zero(m);
-    if (!o.extrapolate) return field;
-
-    // The narrow field n(r/√2): the pilot where r = max_radius, computed where it is missing.
-    std::vector<int> missing(static_cast<std::size_t>(m), -1);
-    for (std::int64_t f = 0; f < m; ++f) {
-        const int narrow = std::min(level[std::size_t(f)] + half_octave, last);
-        if (field.radius[f] >= o.extrapolation_min_radius && narrow != pilot_level && narrow != level[std::size_t(f)])
-            missing[std::size_t(f)] = narrow;
-    }
-    const PointMatrix extra = normals_at_levels(volume, rows, surface, levels, missing, o.kernel);
-#pragma omp parallel for schedule(static)
-    for (std::int64_t f = 0; f < m; ++f) {
-        const int narrow = std::min(level[std::size_t(f)] + half_octave, last);
-        if (field.radius[f] < o.extrapolation_min_radius || narrow == level[std::size_t(f)]) continue;
-        const Eigen::RowVector3d n_narrow = missing[std::size_t(f)] >= 0 ? extra.row(f) : pilot.row(f);
-        field.normals.row(f) = extrapolated_normal(field.normals.row(f), n_narrow, o);
-        field.extrapolated[f] = 1;
+    if (o.extrapolate) extrapolate_field(volume, rows, surface, levels, level, pilot, pilot_level, o, field);
+    if (o.smoothing_steps > 0) {
+        std::vector<std::uint8_t> smooth(static_cast<std::size_t>(m));
+        for (std::int64_t f = 0; f < m; ++f) smooth[std::size_t(f)] = field.radius[f] < o.smoothing_below ? 1 : 0;
+        smooth_field(surface, field.normals, o.smoothing_steps, o.smoothing_power, smooth);
     }
     return field;
 }

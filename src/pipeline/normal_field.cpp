@@ -121,6 +121,8 @@ AdaptiveNormalOptions default_adaptive_options(const NormalFieldOptions& o, cons
     adaptive.reach_factor = 1.5;
     adaptive.extrapolation_min_radius = 6.0 * voxel;
     adaptive.reach_cap = 13.0 * voxel;  // the default --alpha-reach (12 voxels) needs the reach up to there
+    adaptive.smoothing_steps = 4;       // on thin parts, whose small balls are noisy
+    adaptive.smoothing_below = 5.0 * voxel;
     adaptive.kernel = parse_integral_invariant_kernel(o.ii_kernel);
     return adaptive;
 }
