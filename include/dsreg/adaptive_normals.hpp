@@ -7,10 +7,12 @@
 // thick and smooth a larger ball averages out more digitization noise, and two radii remove the
 // bias that grows with the radius. So every surfel gets its own radius
 //
-//     r = min(max_radius, max(min_radius, reach_factor · reach)),   rounded down to a level,
+//     r = min(max_radius, max(min_radius, reach_factor · reach), local thickness),  rounded down
 //
-// `reach` being its local reach (local_reach.hpp: the smaller of the object's and the
-// background's, measured along a first field and made robust to one-voxel noise), and, where
+// to a level, `reach` being its local reach (local_reach.hpp: the smaller of the object's and the
+// background's, measured along a first field and made robust to one-voxel noise) and the local
+// thickness that of the object at the surfel's object voxel and of the background at its
+// background voxel (so with min_radius ≤ 2 × the smallest spacing, r never exceeds it), and, where
 // r is large enough, the Richardson extrapolation 2·n(r/√2) − n(r) of the II normal, which
 // cancels its O(r²) bias; where r is small (thin parts, whose small balls see few voxels and are
 // noisy), a few steps of averaging with the adjacent faces, which, unlike a larger ball, never
@@ -28,7 +30,7 @@ namespace dsreg {
 
 struct AdaptiveNormalOptions {
     double max_radius = 0;      ///< physical units: the radius where the object is thick
-    double min_radius = 0;      ///< physical units: the floor of the radius (the thinnest parts)
+    double min_radius = 0;      ///< physical units: the floor of the radius (the thinnest parts); see above
     double reach_factor = 1.0;  ///< r ≤ reach_factor · reach (where above min_radius)
     int reach_rings = 3;        ///< reach made robust: the largest within this many rings (local_reach.hpp)
     double reach_cap = 0;       ///< the reach is measured up to this (physical); at least max_radius/reach_factor + 1 voxel

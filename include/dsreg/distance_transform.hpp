@@ -26,4 +26,19 @@ enum class DistanceTarget {
 /// spacing. O(voxels), 4 bytes per voxel plus one line of work space per thread.
 std::vector<float> euclidean_distance_transform(const BinaryVolume& volume, DistanceTarget target);
 
+/// The same on the grid grown by `padding` voxels on every side (background there), so that
+/// distances are also known up to `padding` voxels outside the volume: voxel (i,j,k) of the
+/// volume is voxel (i,j,k) + padding of `grid`. 4 bytes per voxel of the grown grid. Throws
+/// dsreg::Error for a negative padding.
+struct PaddedDistanceMap {
+    VoxelGrid grid;                ///< the grown grid (same spacing; origin moved out by the padding)
+    std::int64_t padding = 0;
+    std::vector<float> distance;   ///< one value per voxel of `grid`
+
+    float at(std::int64_t i, std::int64_t j, std::int64_t k) const {  ///< voxel (i,j,k) of the grown grid
+        return distance[std::size_t(grid.linear_index(i, j, k))];
+    }
+};
+PaddedDistanceMap padded_distance_transform(const BinaryVolume& volume, DistanceTarget target, std::int64_t padding);
+
 }  // namespace dsreg

@@ -14,14 +14,16 @@ namespace dsreg {
 
 namespace {
 
-/// Radii max·2^(−l/per_octave) for l = 0 … count − 1, the last one ≥ min.
+/// Radii max·2^(−l/per_octave) for l = 0 … count − 2, all above min, and min itself last.
 struct RadiusLevels {
     double max_radius, min_radius;
     int per_octave;
 
-    int count() const { return 1 + int(std::floor(per_octave * std::log2(max_radius / min_radius) + 1e-9)); }
-    double radius(int level) const { return max_radius * std::exp2(-double(level) / per_octave); }
-    /// The level of the largest radius ≤ r, clamped to the levels.
+    int count() const { return 1 + int(std::ceil(per_octave * std::log2(max_radius / min_radius) - 1e-9)); }
+    double radius(int level) const {
+        return level >= count() - 1 ? min_radius : max_radius * std::exp2(-double(level) / per_octave);
+    }
+    /// The level of the largest radius ≤ r (the smallest radius if r is below it).
     int level_of(double r) const {
         if (!(r < max_radius)) return 0;
         const int l = int(std::ceil(per_octave * std::log2(max_radius / r) - 1e-9));
@@ -96,6 +98,34 @@ void extrapolate_field(const BinaryVolume& volume, const detail::RowRuns& rows, 
     }
 }
 
+/// The level of each surfel: the radius reach_factor · (robust reach), at most the local
+/// thickness of the object at the surfel's object voxel and of the background at its background
+/// voxel. The raw reach is at most half of each, so only where the radius exceeds twice the raw
+/// reach (the rings raised it) is the thickness searched for.
+std::vector<int> radius_levels(const BinaryVolume& volume, const DigitalSurface& surface, const ReachMaps& maps,
+                               const SurfelReach& raw, const SurfelReach& robust, const RadiusLevels& levels,
+                               const AdaptiveNormalOptions& o) {
+    const std::int64_t m = surface.face_count();
+    std::vector<int> level(static_cast<std::size_t>(m));
+    const Eigen::VectorXd reach = robust.smallest(), safe = 2.0 * raw.smallest();
+#pragma omp parallel for schedule(dynamic, 256)
+    for (std::int64_t f = 0; f < m; ++f) {
+        int l = levels.level_of(o.reach_factor * reach[f]);
+        const double r = levels.radius(l);
+        if (r > safe[f]) {
+            const Surfel& s = surface.surfels[std::size_t(f)];
+            const Index3 v{s.voxel[0], s.voxel[1], s.voxel[2]};
+            Index3 w = v;
+            w[std::size_t(s.axis)] += s.sign;
+            const double thickness = 2.0 * std::min(half_local_thickness(volume, maps, v, 0.5 * r),
+                                                    half_local_thickness(volume, maps, w, 0.5 * r));
+            l = std::max(l, levels.level_of(thickness));
+        }
+        level[std::size_t(f)] = l;
+    }
+    return level;
+}
+
 /// Steps of averaging each normal of `smooth` with its four edge-adjacent faces, a neighbour g
 /// weighing max(0, u_f·u_g)^power (so that the field is not averaged across a sharp edge, nor
 /// across the rim of a plate).
@@ -135,13 +165,11 @@ AdaptiveNormalField adaptive_integral_invariant_normals(const BinaryVolume& volu
                                                 std::vector<int>(static_cast<std::size_t>(m), pilot_level), o.kernel);
     AdaptiveNormalField field;
     field.reach_cap = std::max(o.reach_cap, o.max_radius / o.reach_factor + volume.grid.spacing.maxCoeff());
-    field.reach = surfel_reach(volume, surface, pilot, field.reach_cap);
-    field.reach.inner = max_over_rings(surface, field.reach.inner, o.reach_rings);
-    field.reach.outer = max_over_rings(surface, field.reach.outer, o.reach_rings);
-
-    std::vector<int> level(static_cast<std::size_t>(m));
-    const Eigen::VectorXd reach = field.reach.smallest();
-    for (std::int64_t f = 0; f < m; ++f) level[std::size_t(f)] = levels.level_of(o.reach_factor * reach[f]);
+    const ReachMaps maps = reach_maps(volume, std::max(field.reach_cap, 0.5 * o.max_radius));
+    const SurfelReach raw = surfel_reach(volume, surface, pilot, maps);
+    field.reach.inner = max_over_rings(surface, raw.inner, o.reach_rings);
+    field.reach.outer = max_over_rings(surface, raw.outer, o.reach_rings);
+    const std::vector<int> level = radius_levels(volume, surface, maps, raw, field.reach, levels, o);
     field.normals = normals_at_levels(volume, rows, surface, levels, level, o.kernel);
     field.radius.resize(m);
     for (std::int64_t f = 0; f < m; ++f) field.radius[f] = levels.radius(level[std::size_t(f)]);

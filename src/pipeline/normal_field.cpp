@@ -117,7 +117,9 @@ AdaptiveNormalOptions default_adaptive_options(const NormalFieldOptions& o, cons
     const double voxel = loaded.volume.grid.spacing.maxCoeff();
     AdaptiveNormalOptions adaptive;
     adaptive.max_radius = o.max_radius ? *o.max_radius : 10.0 * voxel;
-    adaptive.min_radius = std::min(2.0 * voxel, adaptive.max_radius);
+    // Every voxel is in a ball of its own kind of radius the smallest spacing: 2 of it is never
+    // above the local thickness.
+    adaptive.min_radius = std::min(2.0 * loaded.volume.grid.spacing.minCoeff(), adaptive.max_radius);
     adaptive.reach_factor = 1.5;
     adaptive.extrapolation_min_radius = 6.0 * voxel;
     adaptive.reach_cap = 13.0 * voxel;  // the default --alpha-reach (12 voxels) needs the reach up to there

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <limits>
 
+#include "dsreg/error.hpp"
+
 namespace dsreg {
 
 namespace {
@@ -81,15 +83,32 @@ void pass_along(std::vector<float>& squared, const VoxelGrid& grid, int axis, bo
 }  // namespace
 
 std::vector<float> euclidean_distance_transform(const BinaryVolume& volume, DistanceTarget target) {
+    return padded_distance_transform(volume, target, 0).distance;
+}
+
+PaddedDistanceMap padded_distance_transform(const BinaryVolume& volume, DistanceTarget target, std::int64_t padding) {
+    if (padding < 0) throw Error("padded_distance_transform: the padding must not be negative");
     const bool to_background = target == DistanceTarget::background;
+    PaddedDistanceMap map;
+    map.padding = padding;
+    map.grid = volume.grid;
+    for (int a = 0; a < 3; ++a) map.grid.dims[std::size_t(a)] += 2 * padding;
+    map.grid.origin -= double(padding) * volume.grid.spacing;
     // Squared distances in place (float: exact for integer squared distances below 2^24),
-    // square roots at the end.
-    std::vector<float> squared(volume.mask.size());
-    for (std::size_t v = 0; v < squared.size(); ++v)
-        squared[v] = ((volume.mask[v] != 0) != to_background) ? 0.0f : float(kInfinity);
-    for (int axis = 0; axis < 3; ++axis) pass_along(squared, volume.grid, axis, to_background);
-    for (float& d : squared) d = std::sqrt(d);
-    return squared;
+    // square roots at the end. The padding is background.
+    const float target_value = 0.0f, other = float(kInfinity);
+    map.distance.assign(std::size_t(map.grid.voxel_count()), to_background ? target_value : other);
+    const Index3& d = volume.grid.dims;
+    for (std::int64_t k = 0; k < d[2]; ++k)
+        for (std::int64_t j = 0; j < d[1]; ++j)
+            for (std::int64_t i = 0; i < d[0]; ++i) {
+                const bool object = volume.mask[std::size_t(volume.grid.linear_index(i, j, k))] != 0;
+                map.distance[std::size_t(map.grid.linear_index(i + padding, j + padding, k + padding))] =
+                    object != to_background ? target_value : other;
+            }
+    for (int axis = 0; axis < 3; ++axis) pass_along(map.distance, map.grid, axis, to_background);
+    for (float& value : map.distance) value = std::sqrt(value);
+    return map;
 }
 
 }  // namespace dsreg
