@@ -12,7 +12,9 @@
 // to a level, `reach` being its local reach (local_reach.hpp: the smaller of the object's and the
 // background's, measured along a first field and made robust to one-voxel noise) and the local
 // thickness that of the object at the surfel's object voxel and of the background at its
-// background voxel (so with min_radius ≤ 2 × the smallest spacing, r never exceeds it), and, where
+// background voxel wherever the reach limits r (so with min_radius ≤ 2 × the smallest spacing, r
+// never exceeds it on a part thinner than max_radius; a voxel of noise on a thick part is thin
+// itself but keeps the radius of its surroundings), and, where
 // r is large enough, the Richardson extrapolation 2·n(r/√2) − n(r) of the II normal, which
 // cancels its O(r²) bias; where r is small (thin parts, whose small balls see few voxels and are
 // noisy), a few steps of averaging with the adjacent faces, which, unlike a larger ball, never

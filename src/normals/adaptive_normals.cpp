@@ -100,8 +100,10 @@ void extrapolate_field(const BinaryVolume& volume, const detail::RowRuns& rows, 
 
 /// The level of each surfel: the radius reach_factor · (robust reach), at most the local
 /// thickness of the object at the surfel's object voxel and of the background at its background
-/// voxel. The raw reach is at most half of each, so only where the radius exceeds twice the raw
-/// reach (the rings raised it) is the thickness searched for.
+/// voxel where the robust reach limits the radius at all (a part thinner than max_radius around
+/// the surfel; a voxel of noise on a thick part, thin itself, keeps the radius of its
+/// surroundings). The raw reach is at most half of each thickness, so only where the radius
+/// exceeds twice the raw reach (the rings raised it) is the thickness searched for.
 std::vector<int> radius_levels(const BinaryVolume& volume, const DigitalSurface& surface, const ReachMaps& maps,
                                const SurfelReach& raw, const SurfelReach& robust, const RadiusLevels& levels,
                                const AdaptiveNormalOptions& o) {
@@ -112,7 +114,7 @@ std::vector<int> radius_levels(const BinaryVolume& volume, const DigitalSurface&
     for (std::int64_t f = 0; f < m; ++f) {
         int l = levels.level_of(o.reach_factor * reach[f]);
         const double r = levels.radius(l);
-        if (r > safe[f]) {
+        if (r > safe[f] && o.reach_factor * reach[f] < o.max_radius) {
             const Surfel& s = surface.surfels[std::size_t(f)];
             const Index3 v{s.voxel[0], s.voxel[1], s.voxel[2]};
             Index3 w = v;
