@@ -6,7 +6,10 @@
 #include <fstream>
 #include <map>
 
+#include "dsreg/adaptive_normals.hpp"
 #include "dsreg/error.hpp"
+#include "dsreg/local_weights.hpp"
+#include "dsreg/shrink_correction.hpp"
 #include "dsreg/mesh_io.hpp"
 #include "dsreg/normals.hpp"
 #include "dsreg/pipeline.hpp"
@@ -35,20 +38,46 @@ TEST(Pipeline, EqualsTheStagesCalledByHand) {
     options.solver = SolverKind::Cholmod;
     const PipelineResult result = run_pipeline(loaded, options);
 
+    // The defaults by hand: the adaptive integral invariants, the thin-part data weights from
+    // their reach (reference 12 voxels), the solve, the shrink correction (40 steps).
     const DigitalSurface surface = extract_digital_surface(loaded.volume, Connectivity::TwentySix);
-    const double radius = default_field_radius(options.normals, "ii", loaded);
-    EXPECT_DOUBLE_EQ(radius, 5.0);  // files: 5 voxels with the biweight kernel
-    const PointMatrix u = integral_invariant_normals(loaded.volume, surface, radius);
+    const AdaptiveNormalOptions adaptive = default_adaptive_options(options.normals, loaded);
+    EXPECT_DOUBLE_EQ(adaptive.max_radius, 10.0);  // voxels of a file
+    const AdaptiveNormalField field = adaptive_integral_invariant_normals(loaded.volume, surface, adaptive);
+    RegularizationWeights weights;
+    weights.vertex_alpha = thin_part_alpha(surface, field.reach.smallest(), 12.0);
     SolverOptions solver;
     solver.kind = SolverKind::Cholmod;
-    const RegularizationResult expected = regularize(surface, u, RegularizationWeights{}, solver);
+    const RegularizationResult solved = regularize(surface, field.normals, weights, solver);
+    const ShrinkCorrection expected = correct_shrink(surface, solved.positions, field.normals, 40);
 
     ASSERT_EQ(result.surface.face_count(), surface.face_count());
     EXPECT_EQ((result.surface.quads - surface.quads).cwiseAbs().maxCoeff(), 0);
-    EXPECT_LT((result.field.normals - u).cwiseAbs().maxCoeff(), 1e-15);
+    EXPECT_LT((result.field.normals - field.normals).cwiseAbs().maxCoeff(), 1e-15);
+    EXPECT_LT((result.weights.vertex_alpha - weights.vertex_alpha).cwiseAbs().maxCoeff(), 1e-15);
     EXPECT_LT((result.regularization.positions - expected.positions).cwiseAbs().maxCoeff(), 1e-12);
     EXPECT_EQ(result.object_voxels, loaded.volume.object_voxel_count());
     EXPECT_EQ(result.faces_against_field, 0);
+}
+
+TEST(Pipeline, FixedRadiusAndNoCorrectionsIsThePapersPipeline) {
+    // --radius 5 --alpha-reach 0 --shrink-correction 0: integral invariants of one radius and
+    // the paper's energy, nothing else.
+    const LoadedVolume loaded = loaded_ball();
+    PipelineOptions options;
+    options.solver = SolverKind::Cholmod;
+    options.normals.radius = 5.0;
+    options.extensions.alpha_reach = 0.0;
+    options.extensions.shrink_correction = 0;
+    const PipelineResult result = run_pipeline(loaded, options);
+    const DigitalSurface surface = extract_digital_surface(loaded.volume, Connectivity::TwentySix);
+    const PointMatrix u = integral_invariant_normals(loaded.volume, surface, 5.0);
+    SolverOptions solver;
+    solver.kind = SolverKind::Cholmod;
+    const RegularizationResult expected = regularize(surface, u, RegularizationWeights{}, solver);
+    EXPECT_LT((result.field.normals - u).cwiseAbs().maxCoeff(), 1e-15);
+    EXPECT_EQ(result.weights.vertex_alpha.size(), 0);
+    EXPECT_LT((result.regularization.positions - expected.positions).cwiseAbs().maxCoeff(), 1e-12);
 }
 
 TEST(Pipeline, ReportsEveryStageOnceStartedThenFinishedInOrder) {
