@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "dsreg/text.hpp"
+#include "dsreg/atomic_file.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
 #include "dsreg/mesh_io.hpp"
@@ -23,6 +24,7 @@ struct EvalOptions {
     TruthShapeOptions truth;
     std::string volume;  ///< --volume: classify the voxel centres of this file instead
     bool voxel_coordinates = false;  ///< --voxel-coordinates: the mesh is in the digitization's voxel frame
+    std::string face_errors;         ///< --face-errors: CSV of the normal error of every face
     std::optional<double> min_value, max_value;
     std::optional<double> h;
     std::optional<double> wall_margin;
@@ -168,6 +170,17 @@ void run_against_volume(const EvalOptions& o) {
     print_validity(std::cout, validity, mesh);
 }
 
+/// --face-errors: one line per face, its centroid (the shape's coordinates) and normal error.
+void write_face_errors(const std::string& path, const PolygonMesh& mesh, const MeshEvaluation& e) {
+    const PointMatrix centroids = face_centroids(mesh.vertices, mesh.faces);
+    write_file_atomically(path, [&](std::ostream& out) {
+        out << "x,y,z,normal_angle_deg\n";
+        for (Eigen::Index f = 0; f < centroids.rows(); ++f)
+            out << format("%.9g", centroids(f, 0)) << ',' << format("%.9g", centroids(f, 1)) << ','
+                << format("%.9g", centroids(f, 2)) << ',' << format("%.9g", e.face_angle_deg[std::size_t(f)]) << '\n';
+    });
+}
+
 /// The mesh read from --mesh, in the shape's coordinates (mapped from the voxel frame of
 /// digitize(shape, h) with --voxel-coordinates).
 PolygonMesh mesh_in_shape_frame(const EvalOptions& o, const ImplicitShape& shape, double h) {
@@ -202,6 +215,7 @@ void run(const EvalOptions& o) {
         throw Error(o.mesh + ": " + e.what());
     }
     const MeshValidity validity = mesh_validity(mesh);
+    if (!o.face_errors.empty()) write_face_errors(o.face_errors, mesh, evaluation);
     if (o.json) {
         nlohmann::json j = report_json(o, shape, h, wall_margin, evaluation);
         j["validity"] = validity_json(validity, mesh);
@@ -252,6 +266,9 @@ void add_eval_command(CLI::App& app) {
     cmd->add_flag("--voxel-coordinates", options->voxel_coordinates,
                   "--shape: the mesh is in the voxel coordinates of the digitization at --h (a mesh made from the .vol "
                   "of 'dsreg digitize', spacing 1, origin 0): it is mapped to the shape's coordinates first");
+    cmd->add_option("--face-errors", options->face_errors,
+                    "--shape: write the normal error of every face to this CSV file (centroid x, y, z in the shape's "
+                    "coordinates, angle in degrees; nan where not evaluated), for analyses by region");
     cmd->add_option("--min", options->min_value, "--volume: object = voxels with value >= MIN (default: value > 0)");
     cmd->add_option("--max", options->max_value, "--volume: object = voxels with value <= MAX");
     cmd->add_option("--h", options->h,

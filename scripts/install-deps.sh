@@ -2,17 +2,21 @@
 # Installs the Debian 12 packages dsreg needs, if any is missing.
 #   scripts/install-deps.sh          build and run dsreg
 #   scripts/install-deps.sh --dev    also the test and benchmark libraries
+#   scripts/install-deps.sh --bench  also Debian's VTK and NumPy for Python 3 (bench/slicer_pipeline.py,
+#                                    the 3D Slicer peer, and bench/accuracy.sh; benchmarks only)
 #   scripts/install-deps.sh --fuzz   also clang with its sanitizer/libFuzzer runtimes and OpenMP
 #                                    (scripts/sanitize.sh, scripts/fuzz.sh); implies --dev
 set -euo pipefail
 packages=(build-essential cmake pkg-config libeigen3-dev libsuitesparse-dev libopenblas-dev zlib1g-dev
           libcli11-dev nlohmann-json3-dev libcgal-dev)
 dev=(libgtest-dev libgmock-dev libbenchmark-dev)
+bench=(python3-vtk9 python3-numpy)
 for option in "$@"; do
     case $option in
         --dev) packages+=("${dev[@]}") ;;
+        --bench) packages+=("${bench[@]}") ;;
         --fuzz) packages+=("${dev[@]}" clang libclang-rt-14-dev libomp-dev) ;;
-        *) echo "usage: $0 [--dev] [--fuzz]" >&2; exit 2 ;;
+        *) echo "usage: $0 [--dev] [--bench] [--fuzz]" >&2; exit 2 ;;
     esac
 done
 

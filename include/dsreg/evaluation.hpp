@@ -175,6 +175,7 @@ struct MeshEvaluation {
 
     ErrorStats vertex_distance;   ///< |p − ξ(p)| per vertex, physical units
     ErrorStats normal_angle_deg;  ///< angle between face normal and true normal at ξ(face centroid)
+    std::vector<double> face_angle_deg;  ///< that angle per face (NaN where not evaluated)
 
     double mesh_volume = 0;            ///< signed, divergence theorem
     double shape_volume = 0;           ///< shape_volume(shape)

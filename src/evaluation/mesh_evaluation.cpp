@@ -71,6 +71,9 @@ void evaluate_face_normals(const PolygonMesh& mesh, const ImplicitShape& shape, 
         }
         angles[std::size_t(f)] = angle_degrees(n, truth);
     });
+    result.face_angle_deg = angles;
+    for (double& a : result.face_angle_deg)
+        if (a < 0) a = std::numeric_limits<double>::quiet_NaN();
     std::vector<double> evaluated;
     for (double a : angles) {
         if (a == outside_region) result.faces_outside_region += 1;
