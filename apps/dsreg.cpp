@@ -9,6 +9,7 @@
 #include "digitize_command.hpp"
 #include "eval_command.hpp"
 #include "regularize_command.hpp"
+#include "view_command.hpp"
 
 namespace {
 
@@ -35,6 +36,7 @@ int main(int argc, char** argv) {
     dsreg::cli::add_eval_command(app);
     dsreg::cli::add_convergence_command(app);
     dsreg::cli::add_digitize_command(app);
+    dsreg::cli::add_view_command(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -204,6 +204,9 @@ void add_regularize_command(CLI::App& app) {
     cmd->add_flag("--triangulate", c->outputs.triangulate, "Split each quad along its shorter diagonal");
     cmd->add_option("--input-mesh", c->outputs.input_mesh, "Also write the unregularized digital surface to this file");
     cmd->add_option("--report", c->outputs.report, "Write counts, timings, energies and parameters as JSON");
+    cmd->add_option("--html", c->outputs.html,
+                    "Write a self-contained HTML page showing the result in 3D: the surface, the digital surface, "
+                    "colours by deviation from u, displacement, feature map; the run's summary (docs/viewer.md)");
     cmd->add_flag("-q,--quiet", c->flags.quiet, "Print nothing but errors");
     cmd->add_flag("-v,--verbose", c->flags.verbose, "Print each stage as it finishes");
     cmd->callback([c] { run(*c); });

@@ -7,5 +7,6 @@ cmake -S . -B build/release -DCMAKE_BUILD_TYPE=Release -DDSREG_BUILD_TESTS=OFF -
 cmake --build build/release --target dsreg -j"$(nproc)"
 mkdir -p out
 build/release/dsreg regularize --shape goursat --h 0.25 -o out/goursat.obj --input-mesh out/goursat-digital.obj \
-    --report out/goursat.json --verbose
-echo "Wrote out/goursat.obj (regularized), out/goursat-digital.obj (digital surface) and out/goursat.json (report)."
+    --report out/goursat.json --html out/goursat.html --verbose
+echo "Wrote out/goursat.obj (regularized), out/goursat-digital.obj (digital surface), out/goursat.json (report)"
+echo "and out/goursat.html (open it in a browser: the result in 3D)."

@@ -6,9 +6,13 @@
 #                                    the 3D Slicer peer, and bench/accuracy.sh; benchmarks only)
 #   scripts/install-deps.sh --fuzz   also clang with its sanitizer/libFuzzer runtimes and OpenMP
 #                                    (scripts/sanitize.sh, scripts/fuzz.sh); implies --dev
+#   scripts/install-deps.sh --viewer also Chromium, which opens the HTML pages headless (the
+#                                    viewer's browser test, scripts/render.sh), and Python's PIL,
+#                                    with which the test reads the screenshots
+# libjs-three is a build dependency: three.js is inlined into dsreg's HTML pages (docs/viewer.md).
 set -euo pipefail
 packages=(build-essential cmake pkg-config libeigen3-dev libsuitesparse-dev libopenblas-dev zlib1g-dev
-          libcli11-dev nlohmann-json3-dev libcgal-dev)
+          libcli11-dev nlohmann-json3-dev libcgal-dev libjs-three)
 dev=(libgtest-dev libgmock-dev libbenchmark-dev)
 bench=(python3-vtk9 python3-numpy)
 for option in "$@"; do
@@ -16,7 +20,8 @@ for option in "$@"; do
         --dev) packages+=("${dev[@]}") ;;
         --bench) packages+=("${bench[@]}") ;;
         --fuzz) packages+=("${dev[@]}" clang libclang-rt-14-dev libomp-dev) ;;
-        *) echo "usage: $0 [--dev] [--bench] [--fuzz]" >&2; exit 2 ;;
+        --viewer) packages+=(chromium python3-pil) ;;
+        *) echo "usage: $0 [--dev] [--bench] [--fuzz] [--viewer]" >&2; exit 2 ;;
     esac
 done
 

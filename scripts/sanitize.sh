@@ -9,7 +9,9 @@
 #   SANITIZE_EXCLUDE=REGEX                    tests to leave out (CTest -E); default: the solver
 #                                             accuracy tests (Solvers.*, ClampedRegularization.ReDigitizes*),
 #                                             4/5 of the suite's time, about solvers, not inputs, and
-#                                             run by scripts/test.sh; SANITIZE_EXCLUDE='^$' runs all
+#                                             the browser test of the HTML pages (viewer_browser: about
+#                                             the page's script, needs Chromium), all run by
+#                                             scripts/test.sh; SANITIZE_EXCLUDE='^$' runs all
 #
 # Build folders: $BUILD_DIR (default build/sanitize; the system compiler, gcc on Debian, which
 # builds every part of the code base) and $FUZZ_BUILD_DIR (default build/fuzz; clang, only the
@@ -32,13 +34,13 @@ build=${BUILD_DIR:-build/sanitize}
 fuzz_build=${FUZZ_BUILD_DIR:-build/fuzz}
 start=$SECONDS
 cmake -S . -B "$build" "${common[@]}" -DDSREG_BUILD_TESTS=ON >/dev/null
-cmake --build "$build" -j"$(nproc)" --target dsreg dsreg_tests dsreg_fuzz_replay dsreg_fuzz_seeds
+cmake --build "$build" -j"$(nproc)" --target dsreg dsreg_tests dsreg_fuzz_replay dsreg_fuzz_seeds viewer_test_pages
 echo "sanitize: build of the tests $((SECONDS - start)) s"
 
 start=$SECONDS
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 ctest --test-dir "$build" --output-on-failure -j"$(nproc)" --timeout 900 \
-    -E "${SANITIZE_EXCLUDE:-^(Solvers\.|ClampedRegularization\.ReDigitizes)}"
+    -E "${SANITIZE_EXCLUDE:-^(Solvers\.|ClampedRegularization\.ReDigitizes|viewer_browser$)}"
 echo "sanitize: tests $((SECONDS - start)) s"
 
 fuzz_seconds=${FUZZ_SECONDS:-60}

@@ -22,10 +22,12 @@
 #include "dsreg/error.hpp"
 #include "dsreg/mesh.hpp"
 #include "dsreg/mesh_io.hpp"
+#include "test_support.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
+using dsreg::test::error_message;
 using dsreg::FaceMatrix;
 using dsreg::PointMatrix;
 using dsreg::PolygonMesh;
@@ -100,19 +102,6 @@ void write_bytes(const std::string& path, const std::string& bytes) {
     std::ofstream out(path, std::ios::binary | std::ios::trunc);
     out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
 }
-
-/// The message of the dsreg::Error thrown by `action`; a test failure if it throws nothing.
-std::string error_message(const std::function<void()>& action) {
-    try {
-        action();
-    } catch (const dsreg::Error& error) {
-        return error.what();
-    }
-    ADD_FAILURE() << "expected a dsreg::Error";
-    return "";
-}
-
-#define EXPECT_CONTAINS(text, part) EXPECT_NE(std::string(text).find(part), std::string::npos) << "message: " << (text)
 
 /// Appends numbers in a chosen byte order, to build binary PLY files by hand.
 class ByteWriter {

@@ -145,6 +145,40 @@ TEST(Pipeline, FromAShapeWritesTheMeshAndAReportThatDescribesIt) {
               std::string::npos);
 }
 
+TEST(Pipeline, ThePageShowsTheResultWithItsDigitalSurfaceAndSummary) {
+    const LoadedVolume loaded = loaded_ball();
+    PipelineOptions options;
+    const PipelineResult result = run_pipeline(loaded, options);
+    const ViewPage page = result_page(result, options);
+    ASSERT_EQ(page.layers.size(), 1u);
+    const ViewLayer& layer = page.layers[0];
+    EXPECT_EQ((layer.mesh.vertices - result.regularization.positions).cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_EQ((layer.mesh.faces - result.surface.quads).cwiseAbs().maxCoeff(), 0);
+    EXPECT_EQ((layer.mesh.face_normals - result.field.normals).cwiseAbs().maxCoeff(), 0.0);
+    ASSERT_TRUE(layer.digital.has_value());
+    EXPECT_EQ((layer.digital->vertices - result.surface.vertices).cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_EQ(page.length_unit, "voxels");
+    std::map<std::string, std::string> summary;
+    for (const SummaryLine& line : page.summary) summary[line.name] = line.value;
+    EXPECT_EQ(summary["input"], "ball");
+    EXPECT_EQ(summary["surfels"], std::to_string(result.surface.face_count()));
+    EXPECT_EQ(summary["normal field"], result.field.description);
+    for (const auto& [stage, seconds] : result.stage_seconds) EXPECT_EQ(summary.count(stage), 1u) << stage;
+    EXPECT_EQ(summary.count("total"), 1u);
+
+    const std::filesystem::path folder = fresh_folder("page");
+    PipelineOutputs outputs;
+    outputs.mesh = (folder / "ball.obj").string();
+    outputs.html = (folder / "ball.obj.html").string();
+    PipelineResult written = result;
+    write_pipeline_outputs(written, options, outputs, VolumeSource{});
+    EXPECT_GT(std::filesystem::file_size(outputs.html), 800000u);  // with three.js
+    outputs.html = (folder / "ball.png").string();
+    EXPECT_THROW(check_pipeline_outputs(outputs), Error);
+    outputs.html = outputs.mesh;
+    EXPECT_THROW(check_pipeline_outputs(outputs), Error);
+}
+
 TEST(Pipeline, OptionsAreCheckedWithTheFlagsNames) {
     const auto message = [](const PipelineOptions& options) {
         try {

@@ -1,10 +1,17 @@
-// Small volumes built in code for the tests.
+// Small volumes built in code for the tests, and checks of error messages.
 #pragma once
+
+#include <gtest/gtest.h>
 
 #include <functional>
 #include <initializer_list>
+#include <string>
 
+#include "dsreg/error.hpp"
 #include "dsreg/volume.hpp"
+
+/// Expects `text` to contain `part` (e.g. an error message and the words it must have).
+#define EXPECT_CONTAINS(text, part) EXPECT_NE(std::string(text).find(part), std::string::npos) << "message: " << (text)
 
 namespace dsreg::test {
 
@@ -32,6 +39,17 @@ inline BinaryVolume make_ball(std::int64_t size, double r, double c) {
     return make_volume({size, size, size}, [=](double x, double y, double z) {
         return (x - c) * (x - c) + (y - c) * (y - c) + (z - c) * (z - c) <= r * r;
     });
+}
+
+/// The message of the dsreg::Error thrown by `action`; a test failure if it throws nothing.
+inline std::string error_message(const std::function<void()>& action) {
+    try {
+        action();
+    } catch (const dsreg::Error& error) {
+        return error.what();
+    }
+    ADD_FAILURE() << "expected a dsreg::Error";
+    return "";
 }
 
 }  // namespace dsreg::test

@@ -50,6 +50,10 @@ namespace dsreg {
 /// unchanged. Throws dsreg::Error for faces of another size or indices out of range.
 PolygonMesh triangulate_shorter_diagonal(const PolygonMesh& mesh);
 
+/// The checks write_mesh makes before writing (see above: face sizes, indices, finite
+/// coordinates, attribute sizes). Throws dsreg::Error whose message starts with `context`.
+void check_mesh(const std::string& context, const PolygonMesh& mesh);
+
 /// Writes `mesh` in the format named by the extension of `path` (see above). Atomic write.
 /// Throws dsreg::Error naming `path` for an unknown extension, an invalid mesh or an I/O failure.
 void write_mesh(const std::string& path, const PolygonMesh& mesh);

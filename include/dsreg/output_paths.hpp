@@ -12,6 +12,10 @@ namespace dsreg {
 /// does not exist.
 void check_mesh_output_path(const std::string& option, const std::string& path);
 
+/// Throws dsreg::Error naming `option` if `path` does not end in .html or .htm or its folder
+/// does not exist.
+void check_page_output_path(const std::string& option, const std::string& path);
+
 /// Throws dsreg::Error naming `option` if the folder of `path` does not exist.
 void check_output_folder(const std::string& option, const std::string& path);
 

@@ -21,6 +21,7 @@
 #include "dsreg/adaptive_normals.hpp"
 #include "dsreg/ambrosio_tortorelli.hpp"
 #include "dsreg/digital_surface.hpp"
+#include "dsreg/html_view.hpp"
 #include "dsreg/implicit_shape.hpp"
 #include "dsreg/mesh.hpp"
 #include "dsreg/progress.hpp"
@@ -213,13 +214,22 @@ struct PipelineOutputs {
     std::string normals;       ///< --export-normals: the field u in the --normals-file format
     std::string features;      ///< --features: AT feature lines as OBJ polylines
     std::string report;        ///< --report: JSON
+    std::string html;          ///< --html: a self-contained page showing the result (result_page)
     bool triangulate = false;  ///< --triangulate
 };
+
+/// The --html page (html_view.hpp): one layer, the regularized surface as quads (also with
+/// --triangulate: the split is the user's output format, not the result) with the digital surface
+/// as a toggle, the field u, the feature map v and its lines after AT; and the run's summary:
+/// input, grid, counts, field, weights, solve, energies, per-stage seconds and peak memory so far.
+/// Lengths are the volume's physical units.
+ViewPage result_page(const PipelineResult& result, const PipelineOptions& options);
 
 /// Checks the output paths (extensions, folders, two outputs on one file) before any work.
 void check_pipeline_outputs(const PipelineOutputs& outputs);
 
-/// Writes every output (each atomically), the report last; adds the "write" stage to `result`.
+/// Writes every output (each atomically; the page after the meshes, the report last); adds the
+/// "write" stage to `result`.
 void write_pipeline_outputs(PipelineResult& result, const PipelineOptions& options, const PipelineOutputs& outputs,
                             const VolumeSource& source, const ProgressCallback& progress = {});
 

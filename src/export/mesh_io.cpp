@@ -66,6 +66,10 @@ PolygonMesh triangulate_shorter_diagonal(const PolygonMesh& mesh) {
     return result;
 }
 
+void check_mesh(const std::string& context, const PolygonMesh& mesh) {
+    mesh_format::check_mesh_for_writing(context, mesh);
+}
+
 void write_mesh(const std::string& path, const PolygonMesh& mesh) {
     const MeshFormat format = format_of(path);
     mesh_format::check_mesh_for_writing(path, mesh);

@@ -20,6 +20,13 @@ void check_mesh_output_path(const std::string& option, const std::string& path) 
     check_output_folder(option, path);
 }
 
+void check_page_output_path(const std::string& option, const std::string& path) {
+    const std::string ext = file_extension(path);
+    if (ext != "html" && ext != "htm")
+        throw Error(option + " " + path + ": the page must be an .html file (got '" + ext + "')");
+    check_output_folder(option, path);
+}
+
 void check_distinct_outputs(const std::vector<std::pair<std::string, std::string>>& outputs) {
     // weakly_canonical resolves ".", "..", symbolic links and the current folder, so that
     // "out/a.obj" and "./out/../out/a.obj" compare equal even before the files exist.

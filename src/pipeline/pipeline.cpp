@@ -87,20 +87,16 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
     return result;
 }
 
-double total_seconds(const PipelineResult& result) {
-    return std::accumulate(result.stage_seconds.begin(), result.stage_seconds.end(), 0.0,
-                           [](double sum, const auto& stage) { return sum + stage.second; });
-}
-
-nlohmann::json energy_json(const EnergyTerms& e, const RegularizationWeights& w) {
-    return {{"data", e.data}, {"alignment", e.alignment}, {"fairness", e.fairness}, {"total", e.total(w)}};
-}
-
 nlohmann::json optional_json(const std::optional<double>& value) {
     return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
 }
 
 }  // namespace
+
+double total_seconds(const PipelineResult& result) {
+    return std::accumulate(result.stage_seconds.begin(), result.stage_seconds.end(), 0.0,
+                           [](double sum, const auto& stage) { return sum + stage.second; });
+}
 
 void check_pipeline_options(const PipelineOptions& o, bool input_is_shape) {
     check_normal_field_options(o.normals, input_is_shape);
@@ -145,6 +141,7 @@ void check_pipeline_outputs(const PipelineOutputs& o) {
     check_mesh_output_path("-o", o.mesh);
     if (!o.input_mesh.empty()) check_mesh_output_path("--input-mesh", o.input_mesh);
     if (!o.report.empty()) check_output_folder("--report", o.report);
+    if (!o.html.empty()) check_page_output_path("--html", o.html);
     if (!o.normals.empty()) check_output_folder("--export-normals", o.normals);
     if (!o.features.empty()) {
         if (file_extension(o.features) != "obj")
@@ -155,7 +152,8 @@ void check_pipeline_outputs(const PipelineOutputs& o) {
                             {"--input-mesh", o.input_mesh},
                             {"--report", o.report},
                             {"--export-normals", o.normals},
-                            {"--features", o.features}});
+                            {"--features", o.features},
+                            {"--html", o.html}});
 }
 
 void write_pipeline_outputs(PipelineResult& result, const PipelineOptions& options, const PipelineOutputs& outputs,
@@ -167,6 +165,7 @@ void write_pipeline_outputs(PipelineResult& result, const PipelineOptions& optio
     if (!outputs.normals.empty())
         write_normals_file(outputs.normals, result.surface, result.field.normals, result.field.description);
     write_feature_lines(outputs.features, options.normals, result.field, result.surface, result.regularization.positions);
+    if (!outputs.html.empty()) write_html_view(outputs.html, result_page(result, options));
     clock.finish(outputs.mesh);
     result.stage_seconds.push_back(clock.stage_seconds().back());
     if (outputs.report.empty()) return;
@@ -234,7 +233,7 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
     report["total_seconds"] = total_seconds(r);
     report["peak_memory_bytes"] = peak_memory_bytes();
     report["outputs"] = {{"mesh", outputs.mesh}, {"input_mesh", outputs.input_mesh},
-                         {"normals", outputs.normals}, {"features", outputs.features}};
+                         {"normals", outputs.normals}, {"features", outputs.features}, {"html", outputs.html}};
     report.update(r.extension_report);
     return report;
 }

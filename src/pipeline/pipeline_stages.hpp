@@ -1,5 +1,6 @@
 // dsreg pipeline — the stages of run_pipeline (include/dsreg/pipeline.hpp), one file each:
-// normal_field.cpp, regularization_extensions.cpp; volume_source.cpp holds stage 1.
+// normal_field.cpp, regularization_extensions.cpp; volume_source.cpp holds stage 1, result_page.cpp
+// the --html page.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -9,6 +10,9 @@
 #include "stage_clock.hpp"
 
 namespace dsreg {
+
+/// The sum of the stage times of `result` (seconds).
+double total_seconds(const PipelineResult& result);
 
 /// Estimates (or reads) the input field and, for --normals at, regularizes it; stages "normals"
 /// and "at" on `clock`.
@@ -25,6 +29,9 @@ nlohmann::json at_report(const NormalFieldOptions& options, const NormalField& f
 
 /// The reference reach of --alpha-reach in physical units (its default: 12 voxels); 0 = off.
 double alpha_reach(const RegularizationExtensions& options, const VoxelGrid& grid);
+
+/// The report's energy object: the three terms of eq. (1) without their weights, and the total.
+nlohmann::json energy_json(const EnergyTerms& terms, const RegularizationWeights& weights);
 
 /// Fills the metric (W0, W2) and the local multipliers of `weights` for this surface and normal
 /// field, reading the maps or files and, given the faces' reach (empty: none), the thin-part

@@ -69,10 +69,6 @@ nlohmann::json local_weights_json(const RegularizationExtensions& o, const Regul
     return json;
 }
 
-nlohmann::json energy_json(const EnergyTerms& e, const RegularizationWeights& w) {
-    return {{"data", e.data}, {"alignment", e.alignment}, {"fairness", e.fairness}, {"total", e.total(w)}};
-}
-
 nlohmann::json clamp_json(const RegularizationExtensions& o, const ClampedRegularizationResult& r, const RegularizationWeights& w,
                           const VoxelAgreement& clamped, const VoxelAgreement& unclamped) {
     const BoxQpReport& q = r.clamp.qp;
@@ -111,6 +107,10 @@ nlohmann::json clamp_json(const RegularizationExtensions& o, const ClampedRegula
 
 double alpha_reach(const RegularizationExtensions& o, const VoxelGrid& grid) {
     return o.alpha_reach ? *o.alpha_reach : 12.0 * grid.spacing.maxCoeff();
+}
+
+nlohmann::json energy_json(const EnergyTerms& e, const RegularizationWeights& w) {
+    return {{"data", e.data}, {"alignment", e.alignment}, {"fairness", e.fairness}, {"total", e.total(w)}};
 }
 
 void check_regularization_extensions(const RegularizationExtensions& o) {
