@@ -256,9 +256,9 @@ ImplicitShape make_truth_shape(const TruthShapeOptions& o) {
 void add_eval_command(CLI::App& app) {
     auto options = std::make_shared<EvalOptions>();
     CLI::App* cmd = app.add_subcommand(
-        "eval", "Measure a mesh (OBJ/OFF/PLY/STL, from dsreg or any tool) against an implicit shape: vertex distance, "
+        "eval", "Measure a mesh (OBJ/OFF/PLY/STL/VTK/VTP, from dsreg or any tool) against an implicit shape: vertex distance, "
                 "normal error, volume, voxel classification, triangle angles");
-    cmd->add_option("mesh", options->mesh, "Mesh file: .obj .off .ply .stl (triangles and/or quads)")->required();
+    cmd->add_option("mesh", options->mesh, "Mesh file: .obj .off .ply .stl .vtk .vtp (triangles and/or quads)")->required();
     add_truth_shape_options(*cmd, options->truth);
     cmd->add_option("--volume", options->volume,
                     "Ground truth as voxels instead of --shape: a volume file (.vol .longvol .pgm3d); only the voxel "

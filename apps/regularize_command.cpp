@@ -27,6 +27,7 @@ struct CliFlags {
     std::vector<double> spacing;
     std::string solver = "auto";
     int connectivity = 26;
+    std::string space = "lps";
     bool quiet = false, verbose = false;
 };
 
@@ -38,7 +39,9 @@ struct RegularizeCommand {
 };
 
 void add_volume_source_options(CLI::App& command, VolumeSource& o, CliFlags& flags) {
-    command.add_option("input", o.input_path, "Volume file: .vol .longvol .pgm3d .raw");
+    command.add_option("input", o.input_path,
+                       "Volume file: .nii .nii.gz .hdr/.img .nrrd .nhdr .mha .mhd .tif .h5 .vtk .dcm .npy .vol .longvol "
+                       ".pgm3d .raw, or a folder holding a DICOM series");
     command.add_option("--shape", o.shape,
                        "Implicit shape instead of a file: a named shape (sphere1 sphere9 ellipsoid cylinder torus "
                        "rcube goursat goursat-hole distel leopold diabolo heart crixxi) or a polynomial such as "
@@ -47,6 +50,7 @@ void add_volume_source_options(CLI::App& command, VolumeSource& o, CliFlags& fla
     command.add_option("--box", o.box, "Half-size of the domain of a polynomial --shape")->capture_default_str();
     command.add_option("--min", o.min_value, "Object = voxels with value >= MIN (default: value > 0)");
     command.add_option("--max", o.max_value, "Object = voxels with value <= MAX");
+    command.add_option("--label", o.label, "Object = voxels equal to N (a label of a label map; not with --min/--max)");
     command.add_option("--raw-dims", flags.raw_dims, "Dimensions X,Y,Z of a .raw volume")->expected(3)->delimiter(',');
     command.add_option("--raw-type", flags.raw_type, "Voxel type of a .raw volume: uint8 int8 uint16 int16 uint32 int32 "
                                                      "uint64 int64 float32 float64")
@@ -151,6 +155,7 @@ void apply_flags(RegularizeCommand& c) {
     }
     if (!f.spacing.empty()) c.source.spacing = Eigen::Vector3d(f.spacing[0], f.spacing[1], f.spacing[2]);
     c.options.solver = parse_solver_kind(f.solver);
+    c.outputs.space = parse_output_space(f.space);
     c.options.connectivity = f.connectivity == 6 ? Connectivity::Six : Connectivity::TwentySix;
     NormalFieldOptions& normals = c.options.normals;
     const bool at = normals.kind == "at";
@@ -176,7 +181,10 @@ void run(RegularizeCommand& c) {
     const ProgressCallback progress = stage_lines(!c.flags.quiet && (c.flags.verbose || isatty(STDERR_FILENO)));
     PipelineResult result = run_pipeline(c.source, c.options, progress);
     write_pipeline_outputs(result, c.options, c.outputs, c.source, progress);
-    if (!c.flags.quiet) std::cerr << "dsreg: " << summary_line(result, c.options) << " -> " << c.outputs.mesh << '\n';
+    if (c.flags.quiet) return;
+    for (const std::string& warning : result.warnings) std::cerr << "dsreg: warning: " << c.source.input_path << ": " << warning << '\n';
+    std::cerr << "dsreg: " << summary_line(result, c.options) << " -> " << c.outputs.mesh
+              << (result.file.world_geometry ? " (" + output_space_name(c.outputs.space) + ")" : "") << '\n';
 }
 
 }  // namespace
@@ -185,7 +193,15 @@ void add_regularize_command(CLI::App& app) {
     auto c = std::make_shared<RegularizeCommand>();
     CLI::App* cmd = app.add_subcommand("regularize", "Regularize the digital surface of a volume into a smooth quad mesh");
     add_volume_source_options(*cmd, c->source, c->flags);
-    cmd->add_option("-o,--output", c->outputs.mesh, "Output mesh: .obj .off .ply (quads) or .stl (triangles)")->required();
+    cmd->add_option("-o,--output", c->outputs.mesh,
+                    "Output mesh: .obj .off .ply .vtk .vtp (quads) or .stl (triangles); .vtk and .vtp are 3D Slicer's "
+                    "model formats")
+        ->required();
+    cmd->add_option("--space", c->flags.space,
+                    "Coordinates of the output meshes: lps (world, as ITK, DICOM and 3D Slicer), ras (world, as nibabel, "
+                    "FreeSurfer, FSL), voxel (voxel indices, voxel centres at integers)")
+        ->check(CLI::IsMember({"lps", "ras", "voxel"}, CLI::ignore_case))
+        ->capture_default_str();
     cmd->add_option("--connectivity", c->flags.connectivity,
                     "Object connectivity where voxels touch by an edge: 6 keeps them apart, 26 joins them")
         ->check(CLI::IsMember({6, 26}))

@@ -75,8 +75,8 @@ void add_view_command(CLI::App& app) {
     CLI::App* cmd = app.add_subcommand(
         "view", "Write one self-contained HTML page showing meshes in 3D (any browser, no network needed)");
     cmd->add_option("meshes", options->meshes,
-                    "Mesh files: .obj .off .ply .stl; each is a layer of the page (a PLY written by dsreg carries "
-                    "the normal field u per face and the feature map v per vertex)")
+                    "Mesh files: .obj .off .ply .stl .vtk .vtp; each is a layer of the page (a PLY, VTK or VTP written "
+                    "by dsreg carries the normal field u per face and the feature map v per vertex)")
         ->required();
     cmd->add_option("-o,--output", options->output, "The page: .html")->required();
     cmd->add_option("--digital", options->digital,

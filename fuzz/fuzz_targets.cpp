@@ -123,8 +123,9 @@ Outcome read_volume_file(const char* target, const std::string& path, const RawV
     for (std::size_t i = 0; i < volume.mask.size(); ++i) {
         FUZZ_CHECK(target, volume.mask[i] <= 1, "mask value other than 0/1");
         // Integer formats: value > 0 survives the rounding to float, so both readers agree.
+        // Float64 values below float's smallest positive value round to 0 in the values.
         if (layout == nullptr || layout->type != RawVoxelType::Float64)
-            FUZZ_CHECK(target, (volume.mask[i] != 0) == (values.values[i] > 0.0f),
+            FUZZ_CHECK(target, (volume.mask[i] != 0) == (values.values[i] > 0.0f) || (volume.mask[i] != 0 && values.values[i] == 0.0f),
                        "mask and values disagree at voxel #" + std::to_string(i));
     }
     if (g.voxel_count() <= 4096 && volume.object_voxel_count() > 0) {
@@ -139,6 +140,15 @@ Outcome volume_target(const char* target, const char* extension, const std::uint
 }
 
 Outcome fuzz_vol(const std::uint8_t* data, std::size_t size) { return volume_target("vol", "vol", data, size); }
+
+/// NIfTI: a .nii.gz when the input starts with the gzip magic, else a .nii.
+Outcome fuzz_nifti(const std::uint8_t* data, std::size_t size) {
+    const bool gzip = size >= 2 && data[0] == 0x1f && data[1] == 0x8b;
+    return volume_target("nifti", gzip ? "nii.gz" : "nii", data, size);
+}
+Outcome fuzz_nrrd(const std::uint8_t* data, std::size_t size) { return volume_target("nrrd", "nrrd", data, size); }
+Outcome fuzz_metaimage(const std::uint8_t* data, std::size_t size) { return volume_target("metaimage", "mha", data, size); }
+Outcome fuzz_npy(const std::uint8_t* data, std::size_t size) { return volume_target("npy", "npy", data, size); }
 Outcome fuzz_longvol(const std::uint8_t* data, std::size_t size) { return volume_target("longvol", "longvol", data, size); }
 Outcome fuzz_pgm3d(const std::uint8_t* data, std::size_t size) { return volume_target("pgm3d", "pgm3d", data, size); }
 
@@ -245,6 +255,8 @@ void check_mesh(const char* target, const PolygonMesh& mesh) {
         FUZZ_CHECK(target, mesh.faces.data()[i] >= 0 && mesh.faces.data()[i] < n, "face index out of range");
     FUZZ_CHECK(target, mesh.vertices.allFinite(), "non-finite vertex coordinate");
     FUZZ_CHECK(target, mesh.face_normals.rows() == 0 || mesh.face_normals.rows() == mesh.faces.rows(), "face normal count");
+    FUZZ_CHECK(target, mesh.coordinate_system.empty() || mesh.coordinate_system == "LPS" || mesh.coordinate_system == "RAS",
+               "coordinate system other than LPS, RAS or none");
     for (const auto& [name, values] : mesh.vertex_scalars)
         FUZZ_CHECK(target, values.size() == n, "vertex scalar '" + name + "' has the wrong size");
 }
@@ -282,6 +294,7 @@ Outcome mesh_target(const char* target, const std::uint8_t* data, std::size_t si
         FUZZ_CHECK(target, again.vertices == mesh.vertices, "round trip changed the vertices");
         FUZZ_CHECK(target, again.faces == mesh.faces, "round trip changed the faces");
     }
+    FUZZ_CHECK(target, again.coordinate_system == mesh.coordinate_system, "round trip changed the coordinate system");
     return outcome;
 }
 
@@ -289,6 +302,8 @@ Outcome fuzz_obj(const std::uint8_t* data, std::size_t size) { return mesh_targe
 Outcome fuzz_off(const std::uint8_t* data, std::size_t size) { return mesh_target("off", data, size); }
 Outcome fuzz_ply(const std::uint8_t* data, std::size_t size) { return mesh_target("ply", data, size); }
 Outcome fuzz_stl(const std::uint8_t* data, std::size_t size) { return mesh_target("stl", data, size); }
+Outcome fuzz_vtk(const std::uint8_t* data, std::size_t size) { return mesh_target("vtk", data, size); }
+Outcome fuzz_vtp(const std::uint8_t* data, std::size_t size) { return mesh_target("vtp", data, size); }
 
 }  // namespace
 
@@ -321,6 +336,10 @@ const std::vector<Target>& targets() {
         {"vol", "DGtal .vol, versions 2 (raw) and 3 (zlib)", fuzz_vol},
         {"longvol", "DGtal .longvol, versions 2 and 3", fuzz_longvol},
         {"pgm3d", "PGM3D, P2-3D (ASCII) and P5-3D (binary)", fuzz_pgm3d},
+        {"nifti", "NIfTI-1/2 and Analyze header and payload (.nii, or .nii.gz for gzip input)", fuzz_nifti},
+        {"nrrd", "NRRD header and attached payload (raw, gzip)", fuzz_nrrd},
+        {"metaimage", "MetaImage .mha header and payload (raw, zlib)", fuzz_metaimage},
+        {"npy", "NumPy .npy header and payload", fuzz_npy},
         {"raw", "headerless .raw, layout from a 15-byte prefix", fuzz_raw},
         {"polynomial", "polynomial parser (--shape)", fuzz_polynomial},
         {"normals", "normals file (--normals-file)", fuzz_normals},
@@ -328,6 +347,8 @@ const std::vector<Target>& targets() {
         {"off", "OFF mesh reader (dsreg eval)", fuzz_off},
         {"ply", "PLY mesh reader, ASCII and binary (dsreg eval)", fuzz_ply},
         {"stl", "STL mesh reader, ASCII and binary (dsreg eval)", fuzz_stl},
+        {"vtk", "VTK legacy PolyData reader, ASCII and binary (dsreg eval)", fuzz_vtk},
+        {"vtp", "VTK XML PolyData reader (dsreg eval)", fuzz_vtp},
     };
     return all;
 }

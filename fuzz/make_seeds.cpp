@@ -3,8 +3,9 @@
 //   dsreg_fuzz_seeds OUT_DIR      creates OUT_DIR/<target>/seed-* for every target
 //
 // Small volumes (.vol v2/v3, .longvol v2/v3, .pgm3d P2/P5 with 1- and 2-byte values, .raw of
-// several types), polynomials (the named shapes, written by Polynomial::to_string), normals
-// files (write_normals_file) and meshes (write_mesh: OBJ, OFF, PLY with attributes, STL).
+// several types; NIfTI, NRRD and MetaImage by ITK's writers, .npy), polynomials (the named
+// shapes, written by Polynomial::to_string), normals files (write_normals_file) and meshes
+// (write_mesh: OBJ, OFF, PLY with attributes, STL, VTK, VTP).
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -83,6 +84,27 @@ void volume_seeds(const fs::path& out) {
     write_bytes(out / "raw" / "seed-float32-header", fuzz::raw_input(5, 4, 3, 8, false, 4, floats));
 }
 
+/// NIfTI (.nii, .nii.gz, 8- and 16-bit), NRRD (raw, gzip), MetaImage (raw, compressed) and .npy
+/// files of a small oblique image, written by ITK's writers (write_image) and write_npy.
+void medical_seeds(const fs::path& out) {
+    VoxelGrid grid;
+    grid.dims = {5, 4, 3};
+    grid.spacing = Eigen::Vector3d(0.75, 1.0, 1.25);
+    grid.origin = Eigen::Vector3d(-3.5, 2.25, 1.0);
+    const double c = std::cos(0.4), s = std::sin(0.4);
+    grid.direction << c, -s, 0, s, c, 0, 0, 0, 1;
+    std::vector<double> values;
+    for (const std::uint8_t b : ball_values<std::uint8_t>(grid.dims, 200)) values.push_back(b);
+    write_image((out / "nifti" / "seed-uint8.nii").string(), grid, values, RawVoxelType::UInt8, false);
+    write_image((out / "nifti" / "seed-int16.nii.gz").string(), grid, values, RawVoxelType::Int16, true);
+    write_image((out / "nrrd" / "seed-raw.nrrd").string(), grid, values, RawVoxelType::UInt16, false);
+    write_image((out / "nrrd" / "seed-gzip.nrrd").string(), grid, values, RawVoxelType::Float32, true);
+    write_image((out / "metaimage" / "seed-raw.mha").string(), grid, values, RawVoxelType::Int32, false);
+    write_image((out / "metaimage" / "seed-zlib.mha").string(), grid, values, RawVoxelType::UInt8, true);
+    write_npy((out / "npy" / "seed-c-order.npy").string(), grid.dims, values, RawVoxelType::Int16, false);
+    write_npy((out / "npy" / "seed-fortran.npy").string(), grid.dims, values, RawVoxelType::Float64, true);
+}
+
 void polynomial_seeds(const fs::path& out) {
     int n = 0;
     for (const std::string& name : named_shape_names())
@@ -114,12 +136,14 @@ void mesh_seeds(const fs::path& out) {
         attributed.face_normals.row(f) = surface.surfels[std::size_t(f)].trivial_normal().transpose();
     attributed.vertex_scalars.emplace_back("v", Eigen::VectorXd::LinSpaced(quads.vertices.rows(), 0.0, 1.0));
     const PolygonMesh triangles = triangulate_shorter_diagonal(quads);
-    for (const char* format : {"obj", "off", "ply", "stl"}) {
+    for (const char* format : {"obj", "off", "ply", "stl", "vtk", "vtp"}) {
         const fs::path folder = out / format;
         write_mesh((folder / (std::string("seed-quads.") + format)).string(), quads);
         write_mesh((folder / (std::string("seed-triangles.") + format)).string(), triangles);
     }
-    write_mesh((out / "ply" / "seed-attributes.ply").string(), attributed);
+    attributed.coordinate_system = "LPS";
+    for (const char* format : {"ply", "vtk", "vtp"})
+        write_mesh((out / format / (std::string("seed-attributes.") + format)).string(), attributed);
 }
 
 }  // namespace
@@ -133,6 +157,7 @@ int main(int argc, char** argv) {
         const fs::path out = argv[1];
         for (const auto& target : fuzz::targets()) fs::create_directories(out / target.name);
         volume_seeds(out);
+        medical_seeds(out);
         polynomial_seeds(out);
         normals_seeds(out);
         mesh_seeds(out);

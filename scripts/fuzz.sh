@@ -17,7 +17,7 @@ shift || true
 [[ $seconds =~ ^[0-9]+$ ]] || { echo "usage: $0 [SECONDS] [TARGET...]" >&2; exit 2; }
 build=${BUILD_DIR:-build/fuzz}
 jobs=${JOBS:-2}
-all_targets=(vol longvol pgm3d raw polynomial normals obj off ply stl)
+all_targets=(vol longvol pgm3d nifti nrrd metaimage npy raw polynomial normals obj off ply stl vtk vtp)
 targets=("${@:-${all_targets[@]}}")
 
 if [[ ${SKIP_BUILD:-0} != 1 ]]; then
@@ -28,6 +28,8 @@ if [[ ${SKIP_BUILD:-0} != 1 ]]; then
     echo "fuzz: build $((SECONDS - start)) s"
 fi
 
+# Leaks of third-party libraries (ITK's niftilib) are suppressed; dsreg's own are findings.
+export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/fuzz/lsan-suppressions.txt}
 rm -rf "$build/seeds"
 "$build/fuzz/dsreg_fuzz_seeds" "$build/seeds" >/dev/null
 

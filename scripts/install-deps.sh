@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages dsreg needs, if any is missing.
-#   scripts/install-deps.sh          build and run dsreg
-#   scripts/install-deps.sh --dev    also the test and benchmark libraries
+#   scripts/install-deps.sh          build and run dsreg (ITK reads the medical image formats;
+#                                    libgdcm-tools completes GDCM's CMake package, which ITK loads)
+#   scripts/install-deps.sh --dev    also the test and benchmark libraries, and nibabel, VTK and
+#                                    numpy for Debian's /usr/bin/python3 (tests/medical_interop_test.py)
 #   scripts/install-deps.sh --bench  also Debian's VTK and NumPy for Python 3 (bench/slicer_pipeline.py,
 #                                    the 3D Slicer peer, and bench/accuracy.sh; benchmarks only)
 #   scripts/install-deps.sh --fuzz   also clang with its sanitizer/libFuzzer runtimes and OpenMP
@@ -12,9 +14,9 @@
 # libjs-three is a build dependency: three.js is inlined into dsreg's HTML pages (docs/viewer.md).
 set -euo pipefail
 packages=(build-essential cmake pkg-config libeigen3-dev libsuitesparse-dev libopenblas-dev zlib1g-dev
-          libcli11-dev nlohmann-json3-dev libcgal-dev libjs-three)
-dev=(libgtest-dev libgmock-dev libbenchmark-dev)
-bench=(python3-vtk9 python3-numpy)
+          libcli11-dev nlohmann-json3-dev libcgal-dev libjs-three libinsighttoolkit5-dev libgdcm-tools)
+dev=(libgtest-dev libgmock-dev libbenchmark-dev python3 python3-numpy python3-nibabel python3-vtk9)
+bench=(python3 python3-vtk9 python3-numpy)
 for option in "$@"; do
     case $option in
         --dev) packages+=("${dev[@]}") ;;

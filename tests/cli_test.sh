@@ -170,4 +170,19 @@ expect_error "max-memory below the minimum" "is below" regularize "$work/one.vol
 "$DSREG" regularize "$work/one.vol" --max-memory 1G -o "$work/mem.obj" -q
 check "max-memory large enough" test -s "$work/mem.obj"
 
+# Medical images (more in tests/medical_interop_test.py): --space and --label are checked, and a
+# shape's mesh in the default LPS is the grid frame itself (identity direction), untagged.
+expect_error "unknown space" "--space" regularize --shape sphere1 --h 0.5 --space ijk -o "$work/out.obj"
+expect_error "--label with --min" "--label" regularize "$work/empty.vol" --label 2 --min 1 -o "$work/out.obj"
+expect_error "empty label" "no voxel has value = 3" regularize "$work/empty.vol" --label 3 -o "$work/out.obj"
+"$DSREG" regularize --shape sphere9 --h 1 -o "$work/lps.obj" -q
+"$DSREG" regularize --shape sphere9 --h 1 --space ras -o "$work/ras.obj" -q
+check "a shape's LPS mesh is the grid frame" cmp -s "$work/sphere.obj" "$work/lps.obj"
+check "shape meshes carry no coordinate system" test -z "$(grep -l 'SPACE=' "$work/lps.obj")"
+check "RAS negates x and y" test "$(awk '$1 == "v" { printf "%.12g %.12g %.12g\n", -$2, -$3, $4 }' "$work/ras.obj")" = \
+    "$(awk '$1 == "v" { printf "%.12g %.12g %.12g\n", $2, $3, $4 }' "$work/lps.obj")"
+check "RAS keeps the faces (determinant +1)" test "$(grep '^f' "$work/ras.obj")" = "$(grep '^f' "$work/lps.obj")"
+"$DSREG" regularize --shape sphere9 --h 1 -o "$work/s.vtp" -q
+check "vtp output" grep -q '<VTKFile type="PolyData"' "$work/s.vtp"
+
 finish

@@ -747,7 +747,7 @@ TEST_F(MeshIoTest, UnknownExtensionIsRejectedListingTheSupportedOnes) {
     for (const char* name : {"mesh.xyz", "mesh"}) {
         const std::string write_message = error_message([&] { dsreg::write_mesh(path(name), make_unit_cube()); });
         EXPECT_CONTAINS(write_message, path(name));
-        for (const char* extension : {".obj", ".off", ".ply", ".stl"}) EXPECT_CONTAINS(write_message, extension);
+        for (const char* extension : {".obj", ".off", ".ply", ".stl", ".vtk", ".vtp"}) EXPECT_CONTAINS(write_message, extension);
         EXPECT_FALSE(fs::exists(path(name)));
     }
     write_bytes(path("mesh.xyz"), "v 0 0 0\n");
@@ -829,3 +829,119 @@ TEST_F(MeshIoTest, WriteFailingMidwayLeavesTheExistingFileUntouched) {
 }
 
 }  // namespace
+
+// ---- 3D Slicer's model formats: VTK legacy and XML PolyData ------------------------------------
+
+namespace {
+
+void expect_same_mesh(const PolygonMesh& read, const PolygonMesh& written) {
+    EXPECT_EQ(read.vertices, written.vertices);
+    EXPECT_EQ(read.faces, written.faces);
+    EXPECT_EQ(read.face_normals, written.face_normals);
+    ASSERT_EQ(read.vertex_scalars.size(), written.vertex_scalars.size());
+    for (std::size_t s = 0; s < written.vertex_scalars.size(); ++s) {
+        EXPECT_EQ(read.vertex_scalars[s].first, written.vertex_scalars[s].first);
+        EXPECT_EQ(read.vertex_scalars[s].second, written.vertex_scalars[s].second);
+    }
+    EXPECT_EQ(read.coordinate_system, written.coordinate_system);
+}
+
+}  // namespace
+
+TEST_F(MeshIoTest, VtkAndVtpRoundTripEverythingExactly) {
+    PolygonMesh cube = make_awkward_cube();
+    cube.coordinate_system = "LPS";
+    for (const char* name : {"cube.vtk", "cube.vtp"}) {
+        SCOPED_TRACE(name);
+        dsreg::write_mesh(path(name), cube);
+        expect_same_mesh(dsreg::read_mesh(path(name)), cube);
+        PolygonMesh triangles = dsreg::triangulate_shorter_diagonal(cube);
+        triangles.vertex_scalars.clear();
+        triangles.face_normals.resize(0, 3);
+        triangles.coordinate_system = "RAS";
+        dsreg::write_mesh(path(name), triangles);
+        expect_same_mesh(dsreg::read_mesh(path(name)), triangles);
+    }
+}
+
+TEST_F(MeshIoTest, EveryFormatRecordsTheCoordinateSystemWhereSlicerLooksForIt) {
+    PolygonMesh cube = make_unit_cube();
+    for (const char* space : {"LPS", "RAS", ""}) {
+        cube.coordinate_system = space;
+        for (const char* name : {"c.obj", "c.off", "c.ply", "c.stl", "c.vtk", "c.vtp"}) {
+            SCOPED_TRACE(std::string(name) + " " + space);
+            dsreg::write_mesh(path(name), cube);
+            EXPECT_EQ(dsreg::read_mesh(path(name)).coordinate_system, space);
+            const std::string bytes = read_bytes(path(name));
+            const std::string tag = std::string("SPACE=") + space;
+            if (std::string(name) == "c.vtp")
+                EXPECT_EQ(bytes.find("Name=\"SPACE\"") != std::string::npos, *space != '\0');
+            else
+                EXPECT_EQ(bytes.find(tag) != std::string::npos, *space != '\0');
+        }
+    }
+    // Where exactly: the second line of .vtk, the 80-byte header of .stl, a PLY comment, the first OBJ comment.
+    cube.coordinate_system = "LPS";
+    dsreg::write_mesh(path("c.vtk"), cube);
+    std::istringstream vtk(read_bytes(path("c.vtk")));
+    std::string line;
+    std::getline(vtk, line);
+    std::getline(vtk, line);
+    EXPECT_CONTAINS(line, "SPACE=LPS");
+    dsreg::write_mesh(path("c.stl"), cube);
+    EXPECT_CONTAINS(read_bytes(path("c.stl")).substr(0, 80), "SPACE=LPS");
+    dsreg::write_mesh(path("c.ply"), cube);
+    EXPECT_CONTAINS(read_bytes(path("c.ply")), "\ncomment SPACE=LPS\n");
+    dsreg::write_mesh(path("c.obj"), cube);
+    EXPECT_EQ(read_bytes(path("c.obj")).rfind("# ", 0), 0u);
+    EXPECT_CONTAINS(read_bytes(path("c.obj")).substr(0, read_bytes(path("c.obj")).find('\n')), "SPACE=LPS");
+}
+
+TEST_F(MeshIoTest, VtkReaderTakesAsciiFilesAndTheVersion51Layout) {
+    // As VTK 9's vtkPolyDataWriter writes by default: version 5.1, OFFSETS and CONNECTIVITY.
+    write_bytes(path("v51.vtk"), "# vtk DataFile Version 5.1\nvtk output SPACE=RAS\nASCII\nDATASET POLYDATA\n"
+                                 "POINTS 4 float\n0 0 0 1 0 0 0 1 0\n1 1 0\n"
+                                 "METADATA\nINFORMATION 0\n\n"
+                                 "POLYGONS 3 6\nOFFSETS vtktypeint64\n0 3 6\nCONNECTIVITY vtktypeint64\n0 1 2 1 3 2\n"
+                                 "POINT_DATA 4\nNORMALS Normals float\n0 0 1 0 0 1 0 0 1 0 0 1\n"
+                                 "SCALARS level double 1\nLOOKUP_TABLE default\n1 2 3 4\n");
+    const PolygonMesh mesh = dsreg::read_mesh(path("v51.vtk"));
+    EXPECT_EQ(mesh.vertices.rows(), 4);
+    EXPECT_EQ(mesh.faces.rows(), 2);
+    EXPECT_EQ(mesh.faces(1, 1), 3);
+    EXPECT_EQ(mesh.coordinate_system, "RAS");
+    ASSERT_EQ(mesh.vertex_scalars.size(), 1u);
+    EXPECT_EQ(mesh.vertex_scalars[0].second[3], 4.0);
+    // The 4.2 layout in ASCII, with line cells skipped.
+    write_bytes(path("v42.vtk"), "# vtk DataFile Version 4.2\n3D Slicer output. SPACE=LPS\nASCII\nDATASET POLYDATA\n"
+                                 "POINTS 3 double\n0 0 0\n1 0 0\n0 1 0\nLINES 1 3\n2 0 1\nPOLYGONS 1 4\n3 0 1 2\n"
+                                 "CELL_DATA 2\nNORMALS u double\n0 0 1 0 0 1\n");
+    EXPECT_CONTAINS(error_message([&] { dsreg::read_mesh(path("v42.vtk")); }), "CELL_DATA count differs");
+}
+
+TEST_F(MeshIoTest, HostileVtkAndVtpFilesAreRejected) {
+    const std::vector<std::pair<std::string, std::string>> files = {
+        {"image.vtk", "# vtk DataFile Version 3.0\nx\nBINARY\nDATASET STRUCTURED_POINTS\n"},
+        {"huge.vtk", "# vtk DataFile Version 4.2\nx\nBINARY\nDATASET POLYDATA\nPOINTS 2000000000 double\nabc"},
+        {"strips.vtk", "# vtk DataFile Version 4.2\nx\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 0 1 0\n"
+                       "TRIANGLE_STRIPS 1 4\n3 0 1 2\n"},
+        {"index.vtk", "# vtk DataFile Version 4.2\nx\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 0 1 0\n"
+                      "POLYGONS 1 4\n3 0 1 9\n"},
+        {"pentagon.vtk", "# vtk DataFile Version 4.2\nx\nASCII\nDATASET POLYDATA\nPOINTS 5 float\n0 0 0 1 0 0 0 1 0 1 1 0 2 2 0\n"
+                         "POLYGONS 1 6\n5 0 1 2 3 4\n"},
+        {"grid.vtp", "<?xml version=\"1.0\"?><VTKFile type=\"UnstructuredGrid\"></VTKFile>"},
+        {"lying.vtp", "<VTKFile type=\"PolyData\" header_type=\"UInt64\"><PolyData><Piece NumberOfPoints=\"1\" NumberOfPolys=\"0\">"
+                      "<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"binary\">//////////8=</DataArray>"
+                      "</Points></Piece></PolyData></VTKFile>"},
+        {"noclose.vtp", "<VTKFile type=\"PolyData\"><PolyData><Piece NumberOfPoints=\"1\""},
+    };
+    for (const auto& [name, bytes] : files) {
+        SCOPED_TRACE(name);
+        write_bytes(path(name), bytes);
+        EXPECT_CONTAINS(error_message([&] { dsreg::read_mesh(path(name)); }), path(name) + ": ");
+    }
+    EXPECT_CONTAINS(error_message([&] { dsreg::read_mesh(path("image.vtk")); }), "not POLYDATA");
+    EXPECT_CONTAINS(error_message([&] { dsreg::read_mesh(path("huge.vtk")); }), "cannot hold that many");
+    EXPECT_CONTAINS(error_message([&] { dsreg::read_mesh(path("strips.vtk")); }), "triangle strips");
+    EXPECT_CONTAINS(error_message([&] { dsreg::read_mesh(path("lying.vtp")); }), "more than the file can hold");
+}

@@ -119,3 +119,104 @@ put("stl", "triangle-count-2p31.stl", b"\x00" * 80 + struct.pack("<I", 2**31 - 1
 put("stl", "truncated-ascii.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n")
 put("stl", "nan-ascii.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 nan\nvertex 1 0 0\nvertex 0 1 0\n"
     "endloop\nendfacet\nendsolid t\n")
+
+
+# ---- NIfTI (348-byte NIfTI-1 header written field by field)
+def nifti1(dims, datatype=2, bitpix=8, vox_offset=352.0, magic=b"n+1\0", pixdim=(1, 1, 1, 1), slope=1.0):
+    header = bytearray(352)
+    struct.pack_into("<i", header, 0, 348)
+    struct.pack_into("<8h", header, 40, len(dims), *(list(dims) + [1] * (7 - len(dims))))
+    struct.pack_into("<hh", header, 70, datatype, bitpix)
+    struct.pack_into("<8f", header, 76, *(list(pixdim) + [1] * (8 - len(pixdim))))
+    struct.pack_into("<fff", header, 108, vox_offset, slope, 0.0)
+    header[344:348] = magic
+    return bytes(header)
+
+
+put("nifti", "truncated.nii", nifti1((64, 64, 64)) + b"\x01" * 100)
+put("nifti", "lying-gzip.nii.gz", __import__("gzip").compress(nifti1((2000, 2000, 2000)) + b"\x01" * 64))
+put("nifti", "header-size-1000.nii", struct.pack("<i", 1000) + b"\x00" * 400)
+put("nifti", "time-series.nii", nifti1((4, 3, 2, 5)) + b"\x01" * 120)
+put("nifti", "vector.nii", nifti1((4, 3, 2, 1, 3)) + b"\x01" * 72)
+put("nifti", "rgb.nii", nifti1((4, 3, 2), datatype=128, bitpix=24) + b"\x01" * 72)
+put("nifti", "negative-dim.nii", nifti1((4, -3, 2)) + b"\x01" * 24)
+put("nifti", "dims-32767.nii", nifti1((32767, 32767, 32767)) + b"\x01" * 24)
+put("nifti", "vox-offset-inside-header.nii", nifti1((2, 2, 2), vox_offset=100.0) + b"\x01" * 8)
+put("nifti", "vox-offset-nan.nii", nifti1((2, 2, 2), vox_offset=float("nan")) + b"\x01" * 8)
+put("nifti", "pair-without-img.nii", nifti1((2, 2, 2), magic=b"ni1\0"))
+
+# ---- NRRD
+NRRD = "NRRD0004\ntype: {type}\ndimension: {dimension}\nsizes: {sizes}\nencoding: {encoding}\n{extra}\n"
+put("nrrd", "lying-raw.nrrd", NRRD.format(type="short", dimension=3, sizes="2000 2000 2000", encoding="raw",
+                                          extra="endian: little\n") + "0123456789")
+put("nrrd", "lying-gzip.nrrd", NRRD.format(type="uchar", dimension=3, sizes="2000 2000 2000", encoding="gzip", extra="").encode()
+    + __import__("gzip").compress(b"\x01" * 64))
+put("nrrd", "sizes-2p40.nrrd", NRRD.format(type="uchar", dimension=3, sizes="1099511627776 1 1", encoding="raw", extra="") + "x")
+put("nrrd", "sizes-count.nrrd", NRRD.format(type="uchar", dimension=3, sizes="2 2", encoding="raw", extra="") + "x" * 4)
+put("nrrd", "unknown-type.nrrd", NRRD.format(type="quaternion", dimension=3, sizes="2 2 2", encoding="raw", extra="") + "x" * 8)
+put("nrrd", "bzip2.nrrd", NRRD.format(type="uchar", dimension=3, sizes="2 2 2", encoding="bzip2", extra="") + "x" * 8)
+put("nrrd", "no-endian.nrrd", NRRD.format(type="int", dimension=3, sizes="2 2 2", encoding="raw", extra="") + "x" * 32)
+put("nrrd", "missing-data-file.nrrd", NRRD.format(type="uchar", dimension=3, sizes="2 2 2", encoding="raw",
+                                                  extra="data file: no-such-file.raw\n"))
+put("nrrd", "data-file-list.nrrd", NRRD.format(type="uchar", dimension=3, sizes="2 2 2", encoding="raw", extra="data file: LIST\n"))
+put("nrrd", "bad-magic.nrrd", "NRRD9\ntype: uchar\n\n")
+put("nrrd", "time-series.nrrd", NRRD.format(type="uchar", dimension=4, sizes="2 2 2 3", encoding="raw", extra="") + "x" * 24)
+
+# ---- MetaImage
+MHA = "ObjectType = Image\nNDims = {ndims}\nDimSize = {sizes}\nElementType = {type}\n{extra}ElementDataFile = {data}\n"
+put("metaimage", "truncated.mha", MHA.format(ndims=3, sizes="10 10 10", type="MET_USHORT", extra="", data="LOCAL") + "\x00" * 100)
+put("metaimage", "zlib-bomb.mha", MHA.format(ndims=3, sizes="1000 1000 1000", type="MET_UCHAR", extra="CompressedData = True\n",
+                                             data="LOCAL").encode() + zlib.compress(b"\x00" * 64))
+put("metaimage", "missing-data-file.mha", MHA.format(ndims=3, sizes="2 2 2", type="MET_UCHAR", extra="", data="gone.raw"))
+put("metaimage", "vector-type.mha", MHA.format(ndims=3, sizes="2 2 2", type="MET_UCHAR_ARRAY", extra="", data="LOCAL") + "x" * 8)
+put("metaimage", "channels-3.mha", MHA.format(ndims=3, sizes="2 2 2", type="MET_UCHAR", extra="ElementNumberOfChannels = 3\n",
+                                              data="LOCAL") + "x" * 24)
+put("metaimage", "ascii-data.mha", MHA.format(ndims=3, sizes="2 2 2", type="MET_UCHAR", extra="BinaryData = False\n",
+                                              data="LOCAL") + "1 2 3 4 5 6 7 8\n")
+put("metaimage", "no-data-file-line.mha", "ObjectType = Image\nNDims = 3\nDimSize = 2 2 2\n")
+put("metaimage", "dims-2p40.mha", MHA.format(ndims=3, sizes="1099511627776 1 1", type="MET_UCHAR", extra="", data="LOCAL") + "x")
+
+# ---- NumPy .npy
+def npy(header_dict, payload=b""):
+    text = header_dict.encode()
+    text += b" " * ((64 - (10 + len(text) + 1) % 64) % 64) + b"\n"
+    return b"\x93NUMPY\x01\x00" + struct.pack("<H", len(text)) + text + payload
+
+
+put("npy", "truncated.npy", npy("{'descr': '<f8', 'fortran_order': False, 'shape': (100, 100, 100), }", b"\x00" * 64))
+put("npy", "shape-2p40.npy", npy("{'descr': '|u1', 'fortran_order': False, 'shape': (1099511627776, 1, 1), }", b"\x00"))
+put("npy", "structured.npy", npy("{'descr': [('a', '<i4')], 'fortran_order': False, 'shape': (2, 2, 2), }", b"\x00" * 32))
+put("npy", "complex.npy", npy("{'descr': '<c16', 'fortran_order': False, 'shape': (2, 2, 2), }", b"\x00" * 128))
+put("npy", "four-d.npy", npy("{'descr': '|u1', 'fortran_order': False, 'shape': (2, 2, 2, 3), }", b"\x00" * 24))
+put("npy", "header-length-lies.npy", b"\x93NUMPY\x01\x00\xff\xff{'descr': '|u1'")
+
+# ---- VTK meshes
+put("vtk", "points-2p31.vtk", "# vtk DataFile Version 4.2\nx\nBINARY\nDATASET POLYDATA\nPOINTS 2147483647 double\n" + "\x00" * 24)
+put("vtk", "index-out-of-range.vtk", "# vtk DataFile Version 4.2\nx\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 0 1 0\n"
+    "POLYGONS 1 4\n3 0 1 7\n")
+put("vtk", "not-polydata.vtk", "# vtk DataFile Version 4.2\nx\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\n")
+put("vtk", "strips.vtk", "# vtk DataFile Version 4.2\nx\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n0 0 0 1 0 0 0 1 0\n"
+    "TRIANGLE_STRIPS 1 4\n3 0 1 2\n")
+put("vtp", "array-size-2p64.vtp", "<VTKFile type=\"PolyData\" header_type=\"UInt64\"><PolyData><Piece NumberOfPoints=\"1\" "
+    "NumberOfPolys=\"0\"><Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"binary\">//////////8="
+    "</DataArray></Points></Piece></PolyData></VTKFile>")
+put("vtp", "unstructured-grid.vtp", "<?xml version=\"1.0\"?><VTKFile type=\"UnstructuredGrid\"></VTKFile>")
+put("vtp", "offset-beyond-appended.vtp", "<VTKFile type=\"PolyData\"><PolyData><Piece NumberOfPoints=\"1\" NumberOfPolys=\"0\">"
+    "<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"appended\" offset=\"999999\"/></Points></Piece>"
+    "</PolyData><AppendedData encoding=\"raw\">_abc</AppendedData></VTKFile>")
+
+# ---- geometry fields ITK must not see (ITK 5.2 aborts the process on a NaN in a NIfTI sform;
+# fuzz/regressions/nifti/crash-nan-sform-itk-abort.nii is the fuzzer's original input)
+def with_srow(header, values):
+    header = bytearray(header)
+    struct.pack_into("<h", header, 254, 2)  # sform_code
+    struct.pack_into("<12f", header, 280, *values)
+    return bytes(header)
+
+
+put("nifti", "nan-sform.nii", with_srow(nifti1((2, 2, 2)), [float("nan"), 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0]) + b"\x01" * 8)
+put("nifti", "zero-sform-column.nii", with_srow(nifti1((2, 2, 2)), [0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0]) + b"\x01" * 8)
+put("nrrd", "nan-space-directions.nrrd", NRRD.format(type="uchar", dimension=3, sizes="2 2 2", encoding="raw",
+    extra="space: left-posterior-superior\nspace directions: (nan,0,0) (0,1,0) (0,0,1)\n") + "x" * 8)
+put("metaimage", "inf-offset.mha", MHA.format(ndims=3, sizes="2 2 2", type="MET_UCHAR", extra="Offset = inf 0 0\n", data="LOCAL")
+    + "x" * 8)

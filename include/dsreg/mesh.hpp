@@ -25,6 +25,10 @@ struct PolygonMesh {
     FaceMatrix faces;
     PointMatrix face_normals;  ///< empty, or one unit vector per face (e.g. the input field u)
     std::vector<std::pair<std::string, Eigen::VectorXd>> vertex_scalars;  ///< named per-vertex values
+    /// The coordinate system of the positions as 3D Slicer names it: "LPS", "RAS", or "" when
+    /// unspecified (grid frame, voxel coordinates). Writers record it the way Slicer does
+    /// (dsreg/mesh_io.hpp) so that Slicer places the mesh without asking; readers restore it.
+    std::string coordinate_system;
 };
 
 }  // namespace dsreg

@@ -1,6 +1,14 @@
-// dsreg — mesh files: OBJ, OFF, PLY (binary little-endian; ASCII too on reading), STL.
+// dsreg — mesh files: OBJ, OFF, PLY (binary little-endian; ASCII too on reading), STL, and
+// 3D Slicer's model formats VTK legacy PolyData (.vtk) and VTK XML PolyData (.vtp).
 //
-// The format is chosen by the file extension, in any case: .obj, .off, .ply, .stl.
+// The format is chosen by the file extension, in any case: .obj, .off, .ply, .stl, .vtk, .vtp.
+//
+// Coordinate system (PolygonMesh::coordinate_system, "LPS" or "RAS"): written where 3D Slicer's
+// vtkMRMLModelStorageNode writes and looks for it, so that Slicer places the mesh without asking:
+// "SPACE=LPS" in the header line of .vtk, the FieldData string array SPACE = "LPS" of .vtp, the
+// 80-byte header of binary STL, a "comment SPACE=LPS" line of PLY, the first comment line of OBJ
+// (and, for OFF, which Slicer does not read, a comment after "OFF"). Readers restore it from the
+// same place by Slicer's rule ("SPACE=RAS", else "SPACE=LPS", else unspecified).
 //
 // Writing (atomic: a failure never leaves a partial file nor touches an existing one). The mesh
 // is checked first: faces must have 3 or 4 vertices, every index must address a vertex,
@@ -14,6 +22,11 @@
 //    vertex_indices" plus float nx ny nz when face_normals is set.
 //  * STL: binary; quads are split along their shorter diagonal; each facet normal is the unit
 //    geometric normal of its triangle, or 0 for a degenerate triangle.
+//  * VTK: legacy "# vtk DataFile Version 4.2" (what Slicer writes), BINARY; POINTS double,
+//    POLYGONS (quads stay quads), CELL_DATA NORMALS "u" with face_normals, POINT_DATA SCALARS
+//    per vertex scalar (names must be single words).
+//  * VTP: XML PolyData, inline base64 binary arrays (UInt64 headers, no compression): Points
+//    Float64, Polys Int64 connectivity and offsets, CellData "u", PointData per vertex scalar.
 //
 // Reading. Only triangles and quads are accepted: a face with fewer than 3 or more than 4
 // vertices is an error (n-gons are not fan-triangulated, which would be wrong for non-convex
@@ -36,6 +49,14 @@
 //  * STL: ASCII (starts with "solid", several solids allowed) or binary (size 84 + 50 × the
 //    triangle count of the header). Identical positions are merged, so the mesh is indexed;
 //    the facet normals of the file are not kept.
+//  * VTK: ASCII or BINARY; POINTS of any numeric type; POLYGONS in the 4.2 layout or the 5.1
+//    OFFSETS/CONNECTIVITY layout; VERTICES and LINES skipped, TRIANGLE_STRIPS rejected;
+//    CELL_DATA NORMALS become face_normals, POINT_DATA SCALARS of one component become
+//    vertex_scalars, other attribute arrays are skipped. Only DATASET POLYDATA is accepted.
+//  * VTP: what VTK's XML writer writes: ascii, inline binary or appended (raw or base64) arrays,
+//    UInt32 or UInt64 headers, no compression or vtkZLibDataCompressor, either byte order; one
+//    Piece; Verts and Lines skipped, Strips rejected; the CellData Normals array (or "u") gives
+//    face_normals, PointData arrays of one component give vertex_scalars.
 #pragma once
 
 #include <string>

@@ -8,7 +8,9 @@
 // every front end reports the same problem in the same words.
 //
 // Units: every length (h, box, radius, positions) is in the volume's physical units (see
-// volume.hpp); the mesh is in the grid frame of volume.hpp (origin + spacing ⊙ index).
+// volume.hpp); the pipeline works in the grid frame of volume.hpp (origin + spacing ⊙ index), and
+// the mesh files are written in PipelineOutputs::space (world_space.hpp): LPS by default, which
+// for the DGtal formats and shapes (identity direction) is the grid frame itself.
 #pragma once
 
 #include <cstdint>
@@ -29,6 +31,7 @@
 #include "dsreg/solvers.hpp"
 #include "dsreg/volume.hpp"
 #include "dsreg/volume_io.hpp"
+#include "dsreg/world_space.hpp"
 
 namespace dsreg {
 
@@ -42,6 +45,7 @@ struct VolumeSource {
     std::optional<double> h;  ///< grid step of --shape; unset = default_grid_step
     double box = 10;          ///< half-size of the domain of a polynomial shape
     std::optional<double> min_value, max_value;  ///< object = MIN ≤ value ≤ MAX (default value > 0)
+    std::optional<double> label;                 ///< --label N: object = voxels equal to N (not with min/max)
     std::optional<RawVolumeLayout> raw_layout;   ///< layout of a .raw file (--raw-dims, --raw-type, …)
     std::optional<Eigen::Vector3d> spacing;      ///< overrides the file's voxel size
     std::int64_t max_voxels = std::int64_t(1) << 34;
@@ -54,11 +58,18 @@ struct LoadedVolume {
     std::string description;             ///< e.g. "bunny.vol" or "goursat at h=0.25"
     std::optional<ImplicitShape> shape;  ///< set for --shape inputs
     double h = 1;                        ///< grid step (largest spacing for files)
+    VolumeFileInfo file;                 ///< format, value type and notes of a file input
+    std::vector<std::string> warnings;   ///< e.g. an object taking most of the volume
 };
 
 /// Reads or digitizes the volume. Honours max_voxels and max_memory before reading any payload.
 /// Throws dsreg::Error on any problem, including an empty object (naming the file's value range).
+/// When the object of a file takes more than kMostOfTheVolume of its voxels (lobster.vol above 0:
+/// the scanner's cylinder), adds a warning giving the value histogram's main modes.
 LoadedVolume load_volume(const VolumeSource& source);
+
+/// The fraction of a file's voxels above which its object is probably not the intended one.
+constexpr double kMostOfTheVolume = 0.5;
 
 /// Parses a memory size: a number of bytes with an optional suffix K, M, G or T (powers of 1024,
 /// optionally followed by "iB" or "B", any case), e.g. "4G", "512MiB", "1.5g", "1000000".
@@ -178,6 +189,8 @@ void check_pipeline_options(const PipelineOptions& options, bool input_is_shape)
 struct PipelineResult {
     std::string input;  ///< description of the input volume
     VoxelGrid grid;
+    VolumeFileInfo file;                ///< format, value type, notes of a file input
+    std::vector<std::string> warnings;  ///< from load_volume
     std::int64_t object_voxels = 0;
     DigitalSurface surface;
     NormalField field;
@@ -209,20 +222,28 @@ PolygonMesh result_mesh(const PipelineResult& result, bool triangulate, bool dig
 
 /// Where the results go; empty paths are not written.
 struct PipelineOutputs {
-    std::string mesh;          ///< -o: .obj .off .ply .stl
+    std::string mesh;          ///< -o: .obj .off .ply .stl .vtk .vtp
     std::string input_mesh;    ///< --input-mesh: the digital surface
     std::string normals;       ///< --export-normals: the field u in the --normals-file format
     std::string features;      ///< --features: AT feature lines as OBJ polylines
     std::string report;        ///< --report: JSON
     std::string html;          ///< --html: a self-contained page showing the result (result_page)
     bool triangulate = false;  ///< --triangulate
+    /// --space: the coordinates of the meshes and feature lines (world_space.hpp). The files record
+    /// it as 3D Slicer does ("SPACE=LPS") when the input has a world geometry (medical formats).
+    /// The --export-normals file stays in the grid frame (it is read back by --normals-file).
+    OutputSpace space = OutputSpace::Lps;
 };
+
+/// The output mesh of result_mesh() in `space`, tagged with its coordinate system when the input
+/// file has a world geometry. Triangles are split in the grid frame, where lengths are physical.
+PolygonMesh output_mesh(const PipelineResult& result, const PipelineOutputs& outputs, bool digital = false);
 
 /// The --html page (html_view.hpp): one layer, the regularized surface as quads (also with
 /// --triangulate: the split is the user's output format, not the result) with the digital surface
 /// as a toggle, the field u, the feature map v and its lines after AT; and the run's summary:
 /// input, grid, counts, field, weights, solve, energies, per-stage seconds and peak memory so far.
-/// Lengths are the volume's physical units.
+/// Lengths are the volume's physical units, in the grid frame (not --space).
 ViewPage result_page(const PipelineResult& result, const PipelineOptions& options);
 
 /// Checks the output paths (extensions, folders, two outputs on one file) before any work.
@@ -233,8 +254,9 @@ void check_pipeline_outputs(const PipelineOutputs& outputs);
 void write_pipeline_outputs(PipelineResult& result, const PipelineOptions& options, const PipelineOutputs& outputs,
                             const VolumeSource& source, const ProgressCallback& progress = {});
 
-/// The --report content: counts, grid, parameters, solve, energies, per-stage seconds, peak
-/// memory, outputs.
+/// The --report content: input (format, value type, notes, warnings), grid (with direction),
+/// output space and the affine maps to it, counts, parameters, solve, energies, per-stage
+/// seconds, peak memory, outputs.
 nlohmann::json pipeline_report(const PipelineResult& result, const PipelineOptions& options,
                                const PipelineOutputs& outputs, const VolumeSource& source);
 

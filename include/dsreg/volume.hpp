@@ -7,6 +7,12 @@
 //  * Voxels are stored with x varying fastest: linear index = i + nx·(j + ny·k).
 //  * Pointel (a,b,c), a ∈ [0, nx], is the voxel corner at origin + spacing ⊙ (a−½, b−½, c−½).
 //  * Everything outside the grid is background.
+//  * The grid frame above is axis-aligned: it is where every stage works (surface, normals,
+//    regularization, evaluation, clamp boxes). A medical image also has direction cosines: the
+//    world position of grid-frame point p is origin + direction·(p − origin) (ITK's convention:
+//    world = origin + direction·(spacing ⊙ index), world in LPS). Because `direction` is
+//    orthonormal, distances, balls and radii are the same in both frames; meshes are mapped to
+//    the output space only when written (dsreg/world_space.hpp).
 #pragma once
 
 #include <Eigen/Core>
@@ -23,6 +29,10 @@ struct VoxelGrid {
     Index3 dims{0, 0, 0};
     Eigen::Vector3d spacing{1.0, 1.0, 1.0};  ///< physical size of a voxel along x, y, z
     Eigen::Vector3d origin{0.0, 0.0, 0.0};   ///< physical centre of voxel (0,0,0)
+    /// Direction cosines: column c is the unit world (LPS) vector along which index c grows.
+    /// Always orthonormal (readers reject or orthonormalize other matrices); its determinant is
+    /// −1 for a left-handed index frame. Identity for the DGtal formats and digitized shapes.
+    Eigen::Matrix3d direction = Eigen::Matrix3d::Identity();
 
     std::int64_t voxel_count() const { return dims[0] * dims[1] * dims[2]; }
     std::int64_t linear_index(std::int64_t i, std::int64_t j, std::int64_t k) const {

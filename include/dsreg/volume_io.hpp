@@ -1,15 +1,36 @@
 // dsreg — reading and writing voxel volumes.
 //
+// Formats (chosen by the file name, case-insensitively; a folder is a DICOM series):
+//  * DGtal's .vol (v2 raw, v3 zlib), .longvol/.lvol, PGM3D .pgm3d/.p3d, headerless .raw;
+//  * medical and scientific images, read the way ITK (3D Slicer, SimpleITK, ITK-SNAP) reads
+//    them: NIfTI-1/2 (.nii, .nii.gz, .hdr/.img pairs, .img.gz), NRRD (.nrrd, .nhdr with a
+//    detached raw or gzip data file), MetaImage (.mha, .mhd with its data file), multi-page TIFF
+//    (.tif, .tiff), HDF5 as ITK writes it (.h5, .hdf5, .hdf), VTK legacy images (.vtk), DICOM
+//    (a folder holding one series, or one multi-frame .dcm file); NumPy .npy (C or Fortran order:
+//    voxel (i,j,k) is array[i, j, k] whatever the memory order).
+// Geometry: DGtal formats, .raw and .npy have spacing 1, origin 0 and identity direction; the
+// medical formats give ITK's spacing, origin and direction cosines (LPS), see volume.hpp. A
+// negative spacing is made positive by flipping its direction column; a direction within 1e-4 of
+// orthonormal is orthonormalized (polar decomposition; noted in VolumeFileInfo::notes), others are
+// rejected, since the pipeline's grid frame needs distances to be the same as in the world.
+// Only scalar images with at most 3 dimensions of more than one voxel are accepted: a 4-D image
+// (time series) or a vector, RGB or complex image is rejected with a message saying so.
+//
 // Readers decode the voxel values and keep those inside a ValueRange as the object, so a volume
 // costs one byte per voxel in memory whatever its value type: values are thresholded as they are
-// decoded (after conversion to double, so 64-bit values above 2^53 are compared rounded).
-// read_volume_values keeps the values instead (as float, 4 bytes per voxel), through the same
-// header parsing, size checks and decoders; e.g. for per-vertex weight maps.
-// Every reader checks the header against the real size of the file before allocating: a stored
-// payload must fill the rest of the file exactly; a zlib payload must be large enough to inflate
-// to the announced size (zlib cannot exceed 1032:1) and is inflated with a hard cap at that size.
+// decoded (after conversion to double, so 64-bit values above 2^53 are compared rounded; NIfTI's
+// scl_slope/scl_inter are applied first, as ITK does). read_volume_values keeps the values instead
+// (as float, 4 bytes per voxel), through the same header parsing, size checks and decoders; e.g.
+// for per-vertex weight maps. NIfTI, NRRD, MetaImage and .npy payloads are decoded by dsreg itself
+// as they stream from the file (ITK reads their headers; its readers would hold the whole image
+// in memory, twice for .nii.gz); TIFF, HDF5, VTK and DICOM payloads are read by ITK, slab by slab
+// where ITK can stream the format (HDF5, VTK, DICOM series), else whole (TIFF, .dcm).
+// Every reader checks the header against the real size of the file(s) before allocating: a stored
+// payload must fit in its file (exactly, for the DGtal formats and .npy); a compressed payload must
+// be large enough to inflate to the announced size (deflate cannot exceed 1032:1; the same bound is
+// applied to the images ITK decodes) and is inflated with a hard cap at that size.
 // Any malformed input throws dsreg::Error whose message starts with "<path>: " and names the
-// problem. All readers set spacing (1,1,1) and origin (0,0,0).
+// problem; ITK's exceptions are translated into such messages.
 #pragma once
 
 #include <cstdint>
@@ -43,6 +64,16 @@ struct RawVolumeLayout {
     std::uint64_t header_bytes = 0;  ///< bytes to skip at the start of the file
 };
 
+/// What a reader tells about the file besides the voxels (optional output of read_volume).
+struct VolumeFileInfo {
+    std::string format;               ///< "NIfTI-1", "NRRD", "MetaImage", "DICOM series", ".vol", ...
+    std::string value_type;           ///< type of the stored values: "uint8", "int16", "float32", ...
+    std::vector<std::string> notes;   ///< what the reader assumed or corrected, one sentence each
+    /// The file places its voxels in world space (origin and direction cosines: the medical
+    /// formats but TIFF), so that meshes can be written in LPS or RAS (dsreg/world_space.hpp).
+    bool world_geometry = false;
+};
+
 /// Limits that protect the machine from absurd headers.
 struct VolumeLimits {
     std::int64_t max_voxels = std::int64_t(1) << 34;  ///< 16 Gi voxels
@@ -71,16 +102,37 @@ BinaryVolume read_pgm3d(const std::string& path, const ValueRange& range = {}, c
 BinaryVolume read_raw(const std::string& path, const RawVolumeLayout& layout, const ValueRange& range = {},
                       const VolumeLimits& limits = {});
 
-/// Chooses the reader from the file extension, case-insensitively (.vol, .longvol or .lvol,
-/// .pgm3d or .p3d, .raw). A .raw file needs `raw_layout`; it is ignored for the other formats.
-/// Any other extension throws dsreg::Error.
+/// Chooses the reader from the file name (see the list of formats above): a folder is read as a
+/// DICOM series. A .raw file needs `raw_layout`; it is ignored for the other formats. Any other
+/// extension throws dsreg::Error. `info`, if given, receives the format, value type and notes.
 BinaryVolume read_volume(const std::string& path, const ValueRange& range = {}, const RawVolumeLayout* raw_layout = nullptr,
-                         const VolumeLimits& limits = {});
+                         const VolumeLimits& limits = {}, VolumeFileInfo* info = nullptr);
 
 /// The voxel values of a volume file, any format read_volume accepts (same extension rules,
 /// same checks, same errors), without thresholding. PGM values are checked against maxval.
 ScalarVolume read_volume_values(const std::string& path, const RawVolumeLayout* raw_layout = nullptr,
-                                const VolumeLimits& limits = {});
+                                const VolumeLimits& limits = {}, VolumeFileInfo* info = nullptr);
+
+/// Writes a scalar image through ITK's writer for the format named by `path`'s extension (.nii,
+/// .nii.gz, .hdr, .nrrd, .nhdr, .mha, .mhd, .tif, .h5, .vtk), with `grid`'s spacing, origin and
+/// direction, one value per voxel (x fastest) converted to `type`, compressed where the format
+/// allows it and `compress` is set. For tests, fuzz seeds and users converting volumes. Throws
+/// dsreg::Error naming `path` for a bad grid, a value count other than the voxel count, or an
+/// ITK failure; formats of one file are written atomically.
+void write_image(const std::string& path, const VoxelGrid& grid, const std::vector<double>& values, RawVoxelType type,
+                 bool compress = true);
+
+/// Writes a DICOM series through ITK (GDCM): one file per slice k (slice0000.dcm, ...) in the
+/// existing folder `folder`, with Image Position/Orientation (Patient) from `grid`, one new Study,
+/// Series and Frame of Reference UID, and the values converted to `type` (8/16-bit integers
+/// only: uint8, int8, uint16, int16). Throws dsreg::Error naming the folder on failure.
+void write_dicom_series(const std::string& folder, const VoxelGrid& grid, const std::vector<double>& values,
+                        RawVoxelType type);
+
+/// Writes a NumPy .npy file (format 1.0, little-endian, C order unless `fortran_order`) holding
+/// the array a[i, j, k] = values[grid index of (i,j,k)] converted to `type`. Atomic.
+void write_npy(const std::string& path, const Index3& dims, const std::vector<double>& values, RawVoxelType type,
+               bool fortran_order = false);
 
 /// Writers (atomic: a temporary file renamed into place). `values` holds one value per voxel of
 /// `dims`, x fastest. Used by tests, fuzz seeds and users converting volumes. They throw

@@ -29,12 +29,26 @@ void write_obj(const std::string& path, const PolygonMesh& mesh);
 void write_off(const std::string& path, const PolygonMesh& mesh);
 void write_ply(const std::string& path, const PolygonMesh& mesh);
 void write_stl(const std::string& path, const PolygonMesh& mesh);
+void write_vtk(const std::string& path, const PolygonMesh& mesh);
+void write_vtp(const std::string& path, const PolygonMesh& mesh);
 
 // Readers parse the whole content of the file; `path` is only used in error messages.
 PolygonMesh read_obj(const std::string& path, std::string_view content);
 PolygonMesh read_off(const std::string& path, std::string_view content);
 PolygonMesh read_ply(const std::string& path, std::string_view content);
 PolygonMesh read_stl(const std::string& path, std::string_view content);
+PolygonMesh read_vtk(const std::string& path, std::string_view content);
+PolygonMesh read_vtp(const std::string& path, std::string_view content);
+
+// ---- coordinate system, as 3D Slicer records it ------------------------------------------------
+
+/// "SPACE=LPS" / "SPACE=RAS" for a mesh with a coordinate system, else "".
+std::string coordinate_system_tag(const PolygonMesh& mesh);
+
+/// The coordinate system a header text records, by 3D Slicer's rule (vtkMRMLModelStorageNode::
+/// GetCoordinateSystemFromFileHeader): "RAS" if it holds "SPACE=RAS", else "LPS" if it holds
+/// "SPACE=LPS", else "".
+std::string coordinate_system_in(std::string_view header);
 
 // ---- mesh checks ------------------------------------------------------------------------------
 

@@ -76,6 +76,18 @@ void check_mesh_for_writing(const std::string& path, const PolygonMesh& mesh) {
     check_vertex_scalars(path, mesh);
 }
 
+// ---- coordinate system ---------------------------------------------------------------------------
+
+std::string coordinate_system_tag(const PolygonMesh& mesh) {
+    return mesh.coordinate_system.empty() ? "" : "SPACE=" + mesh.coordinate_system;
+}
+
+std::string coordinate_system_in(std::string_view header) {
+    if (header.find("SPACE=RAS") != std::string_view::npos) return "RAS";
+    if (header.find("SPACE=LPS") != std::string_view::npos) return "LPS";
+    return "";
+}
+
 // ---- quads and mixed faces -----------------------------------------------------------------
 
 std::array<Triangle, 2> split_quad(const PointMatrix& vertices, const std::int32_t* quad) {

@@ -2,6 +2,7 @@
 // The formats themselves live in obj_format.cpp, off_format.cpp, ply_format.cpp, stl_format.cpp.
 #include "dsreg/mesh_io.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -13,7 +14,7 @@ namespace dsreg {
 
 namespace {
 
-enum class MeshFormat { Obj, Off, Ply, Stl };
+enum class MeshFormat { Obj, Off, Ply, Stl, Vtk, Vtp };
 
 MeshFormat format_of(const std::string& path) {
     const std::string extension = file_extension(path);
@@ -21,9 +22,11 @@ MeshFormat format_of(const std::string& path) {
     if (extension == "off") return MeshFormat::Off;
     if (extension == "ply") return MeshFormat::Ply;
     if (extension == "stl") return MeshFormat::Stl;
+    if (extension == "vtk") return MeshFormat::Vtk;
+    if (extension == "vtp") return MeshFormat::Vtp;
     const std::string problem =
         extension.empty() ? "has no file extension" : "has unknown extension '." + extension + "'";
-    throw Error(path + ": " + problem + "; supported mesh formats are .obj, .off, .ply and .stl");
+    throw Error(path + ": " + problem + "; supported mesh formats are .obj, .off, .ply, .stl, .vtk and .vtp");
 }
 
 std::string read_file_content(const std::string& path) {
@@ -41,6 +44,56 @@ std::string read_file_content(const std::string& path) {
     in.read(content.data(), size);
     if (in.gcount() != size) throw Error(path + ": read failed");
     return content;
+}
+
+/// The '#' comment lines at the start of a text file (after its first line if `skip_first`), as
+/// vtkOBJReader collects them.
+std::string leading_comments(std::string_view content, bool skip_first) {
+    std::string comments;
+    std::size_t position = 0;
+    bool first = true;
+    while (position < content.size()) {
+        const std::size_t end = std::min(content.find('\n', position), content.size());
+        std::string_view line = content.substr(position, end - position);
+        position = end + 1;
+        if (first && skip_first) {
+            first = false;
+            continue;
+        }
+        first = false;
+        while (!line.empty() && (line.front() == ' ' || line.front() == '\t')) line.remove_prefix(1);
+        if (line.empty() || line == "\r") continue;
+        if (line.front() != '#') break;
+        comments.append(line.substr(1)).push_back('\n');
+    }
+    return comments;
+}
+
+/// The text where 3D Slicer looks for "SPACE=..." in each format (vtk and vtp readers do it themselves).
+std::string coordinate_header(MeshFormat format, std::string_view content) {
+    switch (format) {
+    case MeshFormat::Obj: return leading_comments(content, false);
+    case MeshFormat::Off: return leading_comments(content, true);
+    case MeshFormat::Ply: {
+        const std::size_t end = content.find("end_header");
+        std::string comments;
+        std::size_t position = 0;
+        while (position < std::min(end, content.size())) {
+            const std::size_t line_end = std::min(content.find('\n', position), content.size());
+            const std::string_view line = content.substr(position, line_end - position);
+            if (line.rfind("comment", 0) == 0) comments.append(line).push_back('\n');
+            position = line_end + 1;
+        }
+        return comments;
+    }
+    case MeshFormat::Stl: {
+        const bool ascii = content.rfind("solid", 0) == 0;
+        return std::string(ascii ? content.substr(0, std::min(content.find('\n'), content.size())) : content.substr(0, 80));
+    }
+    case MeshFormat::Vtk:
+    case MeshFormat::Vtp: return "";
+    }
+    return "";
 }
 
 }  // namespace
@@ -82,12 +135,16 @@ void write_mesh(const std::string& path, const PolygonMesh& mesh) {
             return mesh_format::write_ply(path, mesh);
         case MeshFormat::Stl:
             return mesh_format::write_stl(path, mesh);
+        case MeshFormat::Vtk:
+            return mesh_format::write_vtk(path, mesh);
+        case MeshFormat::Vtp:
+            return mesh_format::write_vtp(path, mesh);
     }
 }
 
-PolygonMesh read_mesh(const std::string& path) {
-    const MeshFormat format = format_of(path);
-    const std::string content = read_file_content(path);
+namespace {
+
+PolygonMesh parse_mesh(MeshFormat format, const std::string& path, std::string_view content) {
     switch (format) {
         case MeshFormat::Obj:
             return mesh_format::read_obj(path, content);
@@ -97,8 +154,22 @@ PolygonMesh read_mesh(const std::string& path) {
             return mesh_format::read_ply(path, content);
         case MeshFormat::Stl:
             return mesh_format::read_stl(path, content);
+        case MeshFormat::Vtk:
+            return mesh_format::read_vtk(path, content);
+        case MeshFormat::Vtp:
+            return mesh_format::read_vtp(path, content);
     }
     throw Error(path + ": unsupported mesh format");  // not reached
+}
+
+}  // namespace
+
+PolygonMesh read_mesh(const std::string& path) {
+    const MeshFormat format = format_of(path);
+    const std::string content = read_file_content(path);
+    PolygonMesh mesh = parse_mesh(format, path, content);
+    if (mesh.coordinate_system.empty()) mesh.coordinate_system = mesh_format::coordinate_system_in(coordinate_header(format, content));
+    return mesh;
 }
 
 }  // namespace dsreg

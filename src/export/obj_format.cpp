@@ -168,7 +168,10 @@ void write_obj(const std::string& path, const PolygonMesh& mesh) {
         buffer.append_integer(mesh.vertices.rows());
         buffer.append(" vertices, ");
         buffer.append_integer(mesh.faces.rows());
-        buffer.append(" faces\n");
+        buffer.append(" faces");
+        // 3D Slicer reads the coordinate system from the leading comment lines (vtkOBJReader).
+        if (!mesh.coordinate_system.empty()) buffer.append(" " + coordinate_system_tag(mesh));
+        buffer.append('\n');
         write_obj_vertices(buffer, mesh.vertices);
         write_obj_faces(buffer, mesh.faces);
         buffer.flush();

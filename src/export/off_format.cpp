@@ -21,6 +21,7 @@ constexpr std::uint64_t min_face_line_bytes = 8;
 
 void write_off_header(OutputBuffer& buffer, const PolygonMesh& mesh) {
     buffer.append("OFF\n");
+    if (!mesh.coordinate_system.empty()) buffer.append("# " + coordinate_system_tag(mesh) + "\n");
     buffer.append_integer(mesh.vertices.rows());
     buffer.append(' ');
     buffer.append_integer(mesh.faces.rows());

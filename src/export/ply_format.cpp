@@ -44,7 +44,10 @@ void check_vertex_scalar_names(const std::string& path, const PolygonMesh& mesh)
 }
 
 void write_ply_header(OutputBuffer& buffer, const PolygonMesh& mesh) {
-    buffer.append("ply\nformat binary_little_endian 1.0\ncomment written by dsreg\nelement vertex ");
+    buffer.append("ply\nformat binary_little_endian 1.0\ncomment written by dsreg\n");
+    // 3D Slicer reads the coordinate system from the comments (vtkPLYReader::GetComments).
+    if (!mesh.coordinate_system.empty()) buffer.append("comment " + coordinate_system_tag(mesh) + "\n");
+    buffer.append("element vertex ");
     buffer.append_integer(mesh.vertices.rows());
     buffer.append("\nproperty double x\nproperty double y\nproperty double z\n");
     for (const auto& scalar : mesh.vertex_scalars) {

@@ -239,7 +239,9 @@ void write_stl(const std::string& path, const PolygonMesh& mesh) {
     }
     write_file_atomically(path, [&](std::ostream& out) {
         OutputBuffer buffer(out);
-        std::string header = "binary STL written by dsreg";  // must not start with "solid"
+        // Must not start with "solid"; 3D Slicer reads the coordinate system from it (vtkSTLReader::GetHeader).
+        std::string header = "binary STL written by dsreg";
+        if (!mesh.coordinate_system.empty()) header += " " + coordinate_system_tag(mesh);
         header.resize(stl_header_bytes, ' ');
         buffer.append(header);
         buffer.append_little_endian(static_cast<std::uint32_t>(triangle_count));

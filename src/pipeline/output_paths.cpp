@@ -15,8 +15,8 @@ void check_output_folder(const std::string& option, const std::string& path) {
 
 void check_mesh_output_path(const std::string& option, const std::string& path) {
     const std::string ext = file_extension(path);
-    if (ext != "obj" && ext != "off" && ext != "ply" && ext != "stl")
-        throw Error(option + " " + path + ": unsupported mesh format '" + ext + "' (use .obj .off .ply or .stl)");
+    if (ext != "obj" && ext != "off" && ext != "ply" && ext != "stl" && ext != "vtk" && ext != "vtp")
+        throw Error(option + " " + path + ": unsupported mesh format '" + ext + "' (use .obj .off .ply .stl .vtk or .vtp)");
     check_output_folder(option, path);
 }
 

@@ -12,6 +12,7 @@
 #include "dsreg/mesh_io.hpp"
 #include "dsreg/normals_file.hpp"
 #include "dsreg/text.hpp"
+#include "dsreg/world_space.hpp"
 #include "dsreg/output_paths.hpp"
 #include "pipeline_stages.hpp"
 #include "stage_clock.hpp"
@@ -58,6 +59,8 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
     PipelineResult result;
     result.input = loaded.description;
     result.grid = loaded.volume.grid;
+    result.file = loaded.file;
+    result.warnings = loaded.warnings;
     result.object_voxels = loaded.volume.object_voxel_count();
     if (result.object_voxels == 0) throw Error(loaded.description + ": the object is empty");
 
@@ -89,6 +92,34 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
 
 nlohmann::json optional_json(const std::optional<double>& value) {
     return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
+}
+
+nlohmann::json vector_json(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+nlohmann::json matrix_json(const Eigen::Matrix3d& m) {  // rows
+    return {vector_json(m.row(0).transpose()), vector_json(m.row(1).transpose()), vector_json(m.row(2).transpose())};
+}
+
+/// A 4×4 homogeneous matrix (rows) of `map`.
+nlohmann::json affine_json(const AffineMap& map) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (int r = 0; r < 3; ++r) rows.push_back({map.linear(r, 0), map.linear(r, 1), map.linear(r, 2), map.offset[r]});
+    rows.push_back({0, 0, 0, 1});
+    return rows;
+}
+
+/// The output space of the report: its name and the affine maps into it from the grid frame
+/// and from voxel indices (index → grid frame: origin + spacing ⊙ index).
+nlohmann::json space_json(const VoxelGrid& grid, const PipelineOutputs& outputs, bool world_geometry) {
+    const AffineMap to_space = grid_to_space(grid, outputs.space);
+    AffineMap from_index;
+    from_index.linear = to_space.linear * grid.spacing.asDiagonal();
+    from_index.offset = to_space.apply(grid.origin);
+    return {{"name", output_space_name(outputs.space)},
+            {"recorded_in_files", world_geometry ? slicer_coordinate_system(outputs.space) : ""},
+            {"grid_to_output", affine_json(to_space)},
+            {"index_to_output", affine_json(from_index)},
+            {"faces_reversed", to_space.reverses_orientation()}};
 }
 
 }  // namespace
@@ -137,6 +168,12 @@ PolygonMesh result_mesh(const PipelineResult& result, bool triangulate, bool dig
     return triangulate ? triangulate_shorter_diagonal(mesh) : mesh;
 }
 
+PolygonMesh output_mesh(const PipelineResult& result, const PipelineOutputs& outputs, bool digital) {
+    PolygonMesh mesh = mesh_in_space(result_mesh(result, outputs.triangulate, digital), result.grid, outputs.space);
+    if (!result.file.world_geometry) mesh.coordinate_system.clear();  // shapes, DGtal files: no world frame to name
+    return mesh;
+}
+
 void check_pipeline_outputs(const PipelineOutputs& o) {
     check_mesh_output_path("-o", o.mesh);
     if (!o.input_mesh.empty()) check_mesh_output_path("--input-mesh", o.input_mesh);
@@ -160,11 +197,12 @@ void write_pipeline_outputs(PipelineResult& result, const PipelineOptions& optio
                             const VolumeSource& source, const ProgressCallback& progress) {
     StageClock clock(progress);
     clock.start("write");
-    write_mesh(outputs.mesh, result_mesh(result, outputs.triangulate));
-    if (!outputs.input_mesh.empty()) write_mesh(outputs.input_mesh, result_mesh(result, outputs.triangulate, true));
+    write_mesh(outputs.mesh, output_mesh(result, outputs));
+    if (!outputs.input_mesh.empty()) write_mesh(outputs.input_mesh, output_mesh(result, outputs, true));
     if (!outputs.normals.empty())
         write_normals_file(outputs.normals, result.surface, result.field.normals, result.field.description);
-    write_feature_lines(outputs.features, options.normals, result.field, result.surface, result.regularization.positions);
+    write_feature_lines(outputs.features, options.normals, result.field, result.surface,
+                        map_points(grid_to_space(result.grid, outputs.space), result.regularization.positions));
     if (!outputs.html.empty()) write_html_view(outputs.html, result_page(result, options));
     clock.finish(outputs.mesh);
     result.stage_seconds.push_back(clock.stage_seconds().back());
@@ -180,9 +218,14 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
     const SolveReport& solve = r.regularization.solve;
     nlohmann::json report;
     report["input"] = r.input;
+    report["input_file"] = {{"format", r.file.format}, {"value_type", r.file.value_type}, {"notes", r.file.notes},
+                            {"world_geometry", r.file.world_geometry}};
+    report["warnings"] = r.warnings;
     report["grid"] = {{"dims", r.grid.dims},
-                      {"spacing", {r.grid.spacing.x(), r.grid.spacing.y(), r.grid.spacing.z()}},
-                      {"origin", {r.grid.origin.x(), r.grid.origin.y(), r.grid.origin.z()}}};
+                      {"spacing", vector_json(r.grid.spacing)},
+                      {"origin", vector_json(r.grid.origin)},
+                      {"direction", matrix_json(r.grid.direction)}};
+    report["space"] = space_json(r.grid, outputs, r.file.world_geometry);
     report["counts"] = {{"voxels", r.grid.voxel_count()},
                         {"object_voxels", r.object_voxels},
                         {"surfels", surface.face_count()},
@@ -193,6 +236,7 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
                         {"faces_against_field", r.faces_against_field}};
     report["parameters"] = {{"alpha", o.alpha}, {"beta", o.beta}, {"gamma", o.gamma},
                             {"min", optional_json(source.min_value)}, {"max", optional_json(source.max_value)},
+                            {"label", optional_json(source.label)},
                             {"connectivity", static_cast<int>(o.connectivity)},
                             {"normals", o.normals.kind.empty() ? (o.normals.file.empty() ? "ii" : "file") : o.normals.kind},
                             {"normals_input", field.input},

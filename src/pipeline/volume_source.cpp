@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "dsreg/error.hpp"
+#include "dsreg/value_histogram.hpp"
 #include "dsreg/volume_io.hpp"
 #include "dsreg/text.hpp"
 
@@ -115,16 +116,29 @@ LoadedVolume digitize_shape(const VolumeSource& o) {
     return loaded;
 }
 
-LoadedVolume read_file(const VolumeSource& o) {
+/// The object's values: --label N, or --min/--max (default value > 0).
+ValueRange object_range(const VolumeSource& o) {
     ValueRange range;
+    if (o.label) {
+        if (o.min_value || o.max_value) throw Error("--label selects one value: it cannot be combined with --min or --max");
+        if (!std::isfinite(*o.label)) throw Error("--label must be a finite number");
+        range.has_min = range.has_max = true;
+        range.min = range.max = *o.label;
+        return range;
+    }
     if (o.min_value) range.has_min = true, range.min = *o.min_value;
     if (o.max_value) range.has_max = true, range.max = *o.max_value;
+    return range;
+}
+
+LoadedVolume read_file(const VolumeSource& o) {
+    const ValueRange range = object_range(o);
     VolumeLimits limits;
     limits.max_voxels = memory_voxel_cap(o);
     const bool memory_bound = limits.max_voxels < o.max_voxels;
     LoadedVolume loaded;
     try {
-        loaded.volume = read_volume(o.input_path, range, o.raw_layout ? &*o.raw_layout : nullptr, limits);
+        loaded.volume = read_volume(o.input_path, range, o.raw_layout ? &*o.raw_layout : nullptr, limits, &loaded.file);
     } catch (const Error& error) {
         const std::string message = error.what();
         if (memory_bound && message.find("exceed the limit of") != std::string::npos)
@@ -144,6 +158,7 @@ LoadedVolume read_file(const VolumeSource& o) {
 /// The values that make a voxel of a file part of the object, as the options give them:
 /// "value > 0", "value >= 300", "40 <= value <= 200", "0 < value <= 50".
 std::string object_value_range(const VolumeSource& o) {
+    if (o.label) return "value = " + format_number(*o.label);
     const std::string low = o.min_value ? format_number(*o.min_value) + " <= " : "0 < ";
     const std::string high = o.max_value ? " <= " + format_number(*o.max_value) : "";
     if (!o.max_value) return o.min_value ? "value >= " + format_number(*o.min_value) : "value > 0";
@@ -165,6 +180,23 @@ std::string file_value_range(const VolumeSource& o) {
     }
 }
 
+/// The object takes most of the volume: say so, with the value histogram's main modes (the file
+/// is read twice more, streaming, nothing kept per voxel).
+std::string most_of_the_volume_warning(const VolumeSource& o, double fraction) {
+    std::string modes;
+    try {
+        VolumeLimits limits;
+        limits.max_voxels = memory_voxel_cap(o);
+        const ValueHistogram histogram = read_value_histogram(o.input_path, o.raw_layout ? &*o.raw_layout : nullptr, limits);
+        modes = describe_modes(histogram_modes(histogram), histogram.integral);
+    } catch (const std::exception&) {
+        // only a hint
+    }
+    return "the object (" + object_value_range(o) + ") takes " + format("%.0f", 100 * fraction) +
+           "% of the volume: probably the background or the scanner's field of view rather than the intended object" +
+           (modes.empty() ? "" : "; the values' main modes are " + modes) + " (choose the object with --label, --min, --max)";
+}
+
 }  // namespace
 
 LoadedVolume load_volume(const VolumeSource& o) {
@@ -173,11 +205,14 @@ LoadedVolume load_volume(const VolumeSource& o) {
     if (o.max_voxels <= 0) throw Error("--max-voxels must be positive (got " + std::to_string(o.max_voxels) + ")");
     if (!o.shape.empty()) return digitize_shape(o);
     LoadedVolume loaded = read_file(o);
-    if (loaded.volume.object_voxel_count() == 0) {
+    const std::int64_t object = loaded.volume.object_voxel_count();
+    if (object == 0) {
         const std::string values = file_value_range(o);
         throw Error(o.input_path + ": the object is empty: no voxel has " + object_value_range(o) +
-                    (values.empty() ? "" : "; " + values) + " (choose the object's values with --min and --max)");
+                    (values.empty() ? "" : "; " + values) + " (choose the object's values with --label, --min and --max)");
     }
+    const double fraction = double(object) / double(loaded.volume.grid.voxel_count());
+    if (fraction > kMostOfTheVolume) loaded.warnings.push_back(most_of_the_volume_warning(o, fraction));
     return loaded;
 }
 

@@ -9,6 +9,7 @@
 
 #include "dsreg/atomic_file.hpp"
 #include "dsreg/volume_io.hpp"
+#include "text_header.hpp"
 #include "volume_io_internal.hpp"
 
 namespace dsreg {
@@ -30,13 +31,6 @@ struct DgtalHeader {
     int version = 0;
     HeaderFields fields;
 };
-
-std::string trim(const std::string& text) {
-    const char* spaces = " \t\r";
-    const std::size_t first = text.find_first_not_of(spaces);
-    if (first == std::string::npos) return "";
-    return text.substr(first, text.find_last_not_of(spaces) - first + 1);
-}
 
 /// Reads one header line (without its '\n'); returns false at end of file before any '\n'.
 bool read_header_line(InputFile& file, std::string& line) {

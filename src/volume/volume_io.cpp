@@ -10,10 +10,12 @@
 #include <limits>
 #include <new>
 #include <sstream>
+#include <type_traits>
 #include <utility>
 
 #include "dsreg/atomic_file.hpp"
 #include "dsreg/error.hpp"
+#include "itk_bridge.hpp"
 #include "volume_io_internal.hpp"
 
 namespace dsreg {
@@ -115,28 +117,56 @@ std::int64_t checked_voxel_count(const std::string& path, const Index3& dims, co
 // ----------------------------------------------------------------------------------------------
 // VoxelDestination
 
-VoxelDestination VoxelDestination::mask(const ValueRange& range) { return VoxelDestination(false, range); }
+VoxelDestination VoxelDestination::mask(const ValueRange& range) { return VoxelDestination(Kind::Mask, range); }
 
-VoxelDestination VoxelDestination::values() { return VoxelDestination(true, ValueRange{}); }
+VoxelDestination VoxelDestination::values() { return VoxelDestination(Kind::Values, ValueRange{}); }
+
+VoxelDestination VoxelDestination::statistics(ValueHistogram& histogram) {
+    return VoxelDestination(Kind::Statistics, ValueRange{}, &histogram);
+}
+
+void VoxelDestination::set_geometry(const VoxelGrid& geometry) {
+    grid_.spacing = geometry.spacing;
+    grid_.origin = geometry.origin;
+    grid_.direction = geometry.direction;
+}
 
 void VoxelDestination::allocate(const std::string& path, const Index3& dims) {
     grid_ = VoxelGrid{};
     grid_.dims = dims;
     const auto count = static_cast<std::size_t>(grid_.voxel_count());
+    const bool values = kind_ == Kind::Values;
     try {
-        if (keep_values_)
+        if (kind_ == Kind::Values)
             values_.assign(count, 0.0f);
-        else
+        else if (kind_ == Kind::Mask)
             mask_.assign(count, 0);
     } catch (const std::bad_alloc&) {
-        const std::string bytes = std::to_string(grid_.voxel_count() * (keep_values_ ? 4 : 1));
-        fail(path, "not enough memory for a " + format_dims(dims) + (keep_values_ ? " volume of values (" : " mask (") + bytes +
-                       " bytes)");
+        const std::string bytes = std::to_string(grid_.voxel_count() * (values ? 4 : 1));
+        fail(path, "not enough memory for a " + format_dims(dims) + (values ? " volume of values (" : " mask (") + bytes + " bytes)");
     }
 }
 
+void VoxelDestination::store_x_plane(std::int64_t i, const VoxelDestination& plane) {
+    const std::int64_t nx = grid_.dims[0], ny = grid_.dims[1], nz = grid_.dims[2];
+    for (std::int64_t k = 0; k < nz; ++k)
+        for (std::int64_t j = 0; j < ny; ++j) {
+            const auto source = static_cast<std::size_t>(k + nz * j);
+            const auto target = static_cast<std::size_t>(i + nx * (j + ny * k));
+            if (kind_ == Kind::Values)
+                values_[target] = plane.values_[source];
+            else if (kind_ == Kind::Mask)
+                mask_[target] = plane.mask_[source];
+        }
+}
+
 SampleWriter VoxelDestination::writer(const std::string& path, SampleFormat format) {
-    return keep_values_ ? SampleWriter(path, format, values_) : SampleWriter(path, format, range_, mask_);
+    switch (kind_) {
+    case Kind::Values: return SampleWriter(path, format, values_);
+    case Kind::Mask: return SampleWriter(path, format, range_, mask_);
+    case Kind::Statistics: break;
+    }
+    return SampleWriter(path, format, *histogram_, size());
 }
 
 BinaryVolume VoxelDestination::take_mask() {
@@ -190,6 +220,14 @@ std::size_t InputFile::read(std::uint8_t* destination, std::size_t count) {
     return read_count;
 }
 
+void InputFile::seek(std::uint64_t offset) {
+    if (offset > size_)
+        fail("the file holds " + std::to_string(size_) + " bytes, too few to reach offset " + std::to_string(offset));
+    const auto target = static_cast<std::streamoff>(offset);
+    if (buffer_.pubseekpos(target, std::ios::in) != std::streampos(target)) fail("cannot seek to offset " + std::to_string(target));
+    position_ = offset;
+}
+
 void InputFile::skip(std::uint64_t count) {
     if (count > remaining())
         fail("the file holds " + std::to_string(size_) + " bytes, too few to skip " + std::to_string(count) +
@@ -204,12 +242,16 @@ void InputFile::skip(std::uint64_t count) {
 
 SampleWriter::SampleWriter(const std::string& path, SampleFormat format, std::uint64_t size)
     : path_(path), format_(format), size_(size) {
-    if (format_.bytes == 1) {
-        use_byte_table_ = true;
-        for (int byte = 0; byte < 256; ++byte) {
-            const auto encoded = static_cast<std::uint8_t>(byte);
-            byte_table_[byte] = decode_sample(&encoded, format_);
-        }
+    use_byte_table_ = format_.bytes == 1;
+}
+
+void SampleWriter::build_byte_tables() {
+    if (!use_byte_table_) return;
+    for (int byte = 0; byte < 256; ++byte) {
+        const auto encoded = static_cast<std::uint8_t>(byte);
+        byte_table_[byte] = decode_sample(&encoded, format_);
+        if (rescaled_) byte_table_[byte] = slope_ * byte_table_[byte] + intercept_;
+        mask_table_[byte] = range_.contains(byte_table_[byte]) ? 1 : 0;
     }
 }
 
@@ -217,12 +259,26 @@ SampleWriter::SampleWriter(const std::string& path, SampleFormat format, const V
     : SampleWriter(path, format, mask.size()) {
     range_ = range;
     mask_ = mask.data();
-    for (int byte = 0; byte < 256; ++byte) mask_table_[byte] = range_.contains(byte_table_[byte]) ? 1 : 0;
+    build_byte_tables();
 }
 
 SampleWriter::SampleWriter(const std::string& path, SampleFormat format, std::vector<float>& values)
     : SampleWriter(path, format, values.size()) {
     values_ = values.data();
+    build_byte_tables();
+}
+
+SampleWriter::SampleWriter(const std::string& path, SampleFormat format, ValueHistogram& histogram, std::uint64_t size)
+    : SampleWriter(path, format, size) {
+    histogram_ = &histogram;
+    build_byte_tables();
+}
+
+void SampleWriter::rescale(double slope, double intercept) {
+    rescaled_ = true;
+    slope_ = slope;
+    intercept_ = intercept;
+    build_byte_tables();
 }
 
 void SampleWriter::reject_values_above(double max_value, const std::string& limit_name) {
@@ -237,14 +293,17 @@ void SampleWriter::emit(const std::uint8_t* sample) {
         mask_[written_++] = mask_table_[*sample];
         return;
     }
-    const double value = use_byte_table_ ? byte_table_[*sample] : decode_sample(sample, format_);
+    double value = use_byte_table_ ? byte_table_[*sample] : decode_sample(sample, format_);
+    if (rescaled_ && !use_byte_table_) value = slope_ * value + intercept_;
     if (has_max_ && value > max_value_)
         fail(path_, "value " + format_value(value) + " of voxel #" + std::to_string(written_) + " exceeds " + max_name_ + " " +
                         format_value(max_value_));
     if (mask_ != nullptr)
         mask_[written_++] = range_.contains(value) ? 1 : 0;
-    else
+    else if (values_ != nullptr)
         values_[written_++] = static_cast<float>(value);
+    else
+        histogram_->add(value), ++written_;
 }
 
 void SampleWriter::consume(const std::uint8_t* data, std::size_t count) {
@@ -260,10 +319,103 @@ void SampleWriter::consume(const std::uint8_t* data, std::size_t count) {
         emit(pending_);
         pending_size_ = 0;
     }
-    for (; count >= width; data += width, count -= width) emit(data);
+    const std::size_t whole = count / width;
+    if (has_max_) {
+        for (std::size_t n = 0; n < whole; ++n) emit(data + n * width);  // PGM: each value checked against maxval
+    } else {
+        if (whole > size_ - written_) fail(path_, "payload holds more values than the " + std::to_string(size_) + " voxels announced");
+        decode_run(data, whole);
+    }
+    data += whole * width;
+    count -= whole * width;
     // Keep the incomplete tail (fewer than `width` ≤ 8 bytes) for the next chunk.
     pending_size_ = std::min(count, sizeof pending_);
     if (pending_size_ > 0) std::memcpy(pending_, data, pending_size_);
+}
+
+namespace {
+
+template <typename Unsigned>
+Unsigned byte_swapped(Unsigned bits) {
+    if constexpr (sizeof(Unsigned) == 2) return static_cast<Unsigned>(__builtin_bswap16(bits));
+    if constexpr (sizeof(Unsigned) == 4) return static_cast<Unsigned>(__builtin_bswap32(bits));
+    if constexpr (sizeof(Unsigned) == 8) return static_cast<Unsigned>(__builtin_bswap64(bits));
+    return bits;
+}
+
+bool host_big_endian() {
+    const std::uint16_t probe = 1;
+    std::uint8_t first;
+    std::memcpy(&first, &probe, 1);
+    return first == 0;
+}
+
+/// `count` values of type T (stored with bytes swapped if `swap`), each handed as a double to
+/// `store(index, value)`: the loop every decoder spends its time in.
+template <typename T, typename Store>
+void decode_values(const std::uint8_t* data, std::size_t count, bool swap, double slope, double intercept, bool rescaled,
+                   Store&& store) {
+    using Bits = std::conditional_t<sizeof(T) == 1, std::uint8_t,
+                                    std::conditional_t<sizeof(T) == 2, std::uint16_t,
+                                                       std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>>>;
+    for (std::size_t i = 0; i < count; ++i) {
+        Bits bits;
+        std::memcpy(&bits, data + i * sizeof(T), sizeof(T));
+        if (swap) bits = byte_swapped(bits);
+        T value;
+        std::memcpy(&value, &bits, sizeof(T));
+        double decoded = static_cast<double>(value);
+        if (rescaled) decoded = slope * decoded + intercept;
+        store(i, decoded);
+    }
+}
+
+}  // namespace
+
+template <typename T>
+void SampleWriter::decode_typed(const std::uint8_t* data, std::size_t count) {
+    const bool swap = format_.big_endian != host_big_endian();
+    if (mask_ != nullptr) {
+        std::uint8_t* out = mask_ + written_;
+        const ValueRange range = range_;
+        decode_values<T>(data, count, swap, slope_, intercept_, rescaled_,
+                         [&](std::size_t i, double v) { out[i] = range.contains(v) ? 1 : 0; });
+    } else if (values_ != nullptr) {
+        float* out = values_ + written_;
+        decode_values<T>(data, count, swap, slope_, intercept_, rescaled_,
+                         [&](std::size_t i, double v) { out[i] = static_cast<float>(v); });
+    } else {
+        decode_values<T>(data, count, swap, slope_, intercept_, rescaled_, [&](std::size_t, double v) { histogram_->add(v); });
+    }
+}
+
+void SampleWriter::decode_run(const std::uint8_t* data, std::size_t count) {
+    if (use_byte_table_) {  // 1-byte values: one table look-up each (the table holds the rescaled values)
+        if (mask_ != nullptr)
+            for (std::size_t i = 0; i < count; ++i) mask_[written_ + i] = mask_table_[data[i]];
+        else if (values_ != nullptr)
+            for (std::size_t i = 0; i < count; ++i) values_[written_ + i] = static_cast<float>(byte_table_[data[i]]);
+        else
+            for (std::size_t i = 0; i < count; ++i) histogram_->add(byte_table_[data[i]]);
+    } else {
+        switch (format_.kind) {
+        case SampleKind::Unsigned:
+            if (format_.bytes == 2) decode_typed<std::uint16_t>(data, count);
+            else if (format_.bytes == 4) decode_typed<std::uint32_t>(data, count);
+            else decode_typed<std::uint64_t>(data, count);
+            break;
+        case SampleKind::Signed:
+            if (format_.bytes == 2) decode_typed<std::int16_t>(data, count);
+            else if (format_.bytes == 4) decode_typed<std::int32_t>(data, count);
+            else decode_typed<std::int64_t>(data, count);
+            break;
+        case SampleKind::Float:
+            if (format_.bytes == 4) decode_typed<float>(data, count);
+            else decode_typed<double>(data, count);
+            break;
+        }
+    }
+    written_ += count;
 }
 
 // ----------------------------------------------------------------------------------------------
@@ -291,15 +443,20 @@ void require_exact_payload(const InputFile& file, std::uint64_t expected_bytes, 
         file.fail(std::to_string(available - expected_bytes) + " trailing bytes after the payload: " + description + ", " + holds);
 }
 
-void decode_stored_payload(InputFile& file, SampleWriter& sink) {
+void decode_stored_prefix(InputFile& file, SampleWriter& sink) {
     std::vector<std::uint8_t> chunk(std::size_t(1) << 20);
     while (!sink.complete()) {
-        const std::size_t got = file.read(chunk.data(), chunk.size());
+        const std::uint64_t missing = sink.bytes_missing();
+        const std::size_t got = file.read(chunk.data(), static_cast<std::size_t>(std::min<std::uint64_t>(chunk.size(), missing)));
         if (got == 0)
             file.fail("truncated payload: the file ended (or could not be read) after " + std::to_string(sink.samples_written()) +
                       " values");
         sink.consume(chunk.data(), got);
     }
+}
+
+void decode_stored_payload(InputFile& file, SampleWriter& sink) {
+    decode_stored_prefix(file, sink);
     if (file.peek() != -1) file.fail("trailing bytes after the payload (the file grew while being read?)");
 }
 
@@ -319,33 +476,79 @@ void check_writer_input(const std::string& path, const Index3& dims, std::size_t
 
 namespace volume_io_detail {
 
+namespace {
+
+bool name_ends_with(const std::string& name, const char* suffix) {
+    const std::size_t length = std::strlen(suffix);
+    return name.size() > length && name.compare(name.size() - length, length, suffix) == 0;
+}
+
+}  // namespace
+
+VolumeFormat volume_format(const std::string& path) {
+    std::error_code error;
+    if (std::filesystem::is_directory(path, error)) return VolumeFormat::DicomSeries;
+    std::string name = std::filesystem::path(path).filename().string();
+    std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    static const std::pair<const char*, VolumeFormat> suffixes[] = {
+        {".vol", VolumeFormat::Vol},        {".longvol", VolumeFormat::Longvol},  {".lvol", VolumeFormat::Longvol},
+        {".pgm3d", VolumeFormat::Pgm3d},    {".p3d", VolumeFormat::Pgm3d},        {".raw", VolumeFormat::Raw},
+        {".nii", VolumeFormat::Nifti},      {".nii.gz", VolumeFormat::Nifti},     {".hdr", VolumeFormat::Nifti},
+        {".hdr.gz", VolumeFormat::Nifti},   {".img", VolumeFormat::Nifti},        {".img.gz", VolumeFormat::Nifti},
+        {".nrrd", VolumeFormat::Nrrd},      {".nhdr", VolumeFormat::Nrrd},        {".mha", VolumeFormat::MetaImage},
+        {".mhd", VolumeFormat::MetaImage},  {".npy", VolumeFormat::Npy},          {".tif", VolumeFormat::Tiff},
+        {".tiff", VolumeFormat::Tiff},      {".h5", VolumeFormat::Hdf5},          {".hdf5", VolumeFormat::Hdf5},
+        {".hdf", VolumeFormat::Hdf5},       {".vtk", VolumeFormat::VtkImage},     {".dcm", VolumeFormat::DicomFile},
+    };
+    for (const auto& [suffix, format] : suffixes)
+        if (name_ends_with(name, suffix)) return format;
+    const std::size_t dot = name.find('.', 1);
+    const std::string shown = dot == std::string::npos ? "no extension" : "unknown extension '" + name.substr(dot) + "'";
+    fail(path, "cannot tell the volume format: " + shown +
+                   " (expected .vol .longvol .pgm3d .raw .nii .nii.gz .hdr/.img .nrrd .nhdr .mha .mhd .npy .tif .h5 .vtk .dcm, "
+                   "or a folder holding a DICOM series)");
+}
+
 void read_volume_voxels(const std::string& path, const RawVolumeLayout* raw_layout, const VolumeLimits& limits,
                         VoxelDestination& destination) {
-    const std::string extension = file_extension(path);
-    if (extension == "vol") return read_vol_voxels(path, limits, destination);
-    if (extension == "longvol" || extension == "lvol") return read_longvol_voxels(path, limits, destination);
-    if (extension == "pgm3d" || extension == "p3d") return read_pgm3d_voxels(path, limits, destination);
-    if (extension == "raw") {
+    const VolumeFormat format = volume_format(path);
+    VolumeFileInfo& info = destination.info();
+    switch (format) {
+    case VolumeFormat::Vol: info = {".vol", "uint8", {}}; return read_vol_voxels(path, limits, destination);
+    case VolumeFormat::Longvol: info = {".longvol", "uint64", {}}; return read_longvol_voxels(path, limits, destination);
+    case VolumeFormat::Pgm3d: info = {"PGM3D", "", {}}; return read_pgm3d_voxels(path, limits, destination);
+    case VolumeFormat::Raw:
         if (raw_layout == nullptr)
             fail(path, "a .raw volume has no header: its layout (dimensions, voxel type, byte order) must be given");
+        info = {"raw", "", {}};
         return read_raw_voxels(path, *raw_layout, limits, destination);
+    case VolumeFormat::Nifti: return read_nifti_voxels(path, limits, destination);
+    case VolumeFormat::Nrrd: return read_nrrd_voxels(path, limits, destination);
+    case VolumeFormat::MetaImage: return read_metaimage_voxels(path, limits, destination);
+    case VolumeFormat::Npy: return read_npy_voxels(path, limits, destination);
+    case VolumeFormat::Tiff: return read_itk_voxels(path, ItkFormat::Tiff, limits, destination);
+    case VolumeFormat::Hdf5: return read_itk_voxels(path, ItkFormat::Hdf5, limits, destination);
+    case VolumeFormat::VtkImage: return read_itk_voxels(path, ItkFormat::VtkImage, limits, destination);
+    case VolumeFormat::DicomFile: return read_itk_voxels(path, ItkFormat::DicomFile, limits, destination);
+    case VolumeFormat::DicomSeries: return read_dicom_series_voxels(path, limits, destination);
     }
-    const std::string shown = extension.empty() ? "no extension" : "unknown extension '." + extension + "'";
-    fail(path, "cannot tell the volume format: " + shown + " (expected .vol, .longvol, .lvol, .pgm3d, .p3d or .raw)");
 }
 
 }  // namespace volume_io_detail
 
 BinaryVolume read_volume(const std::string& path, const ValueRange& range, const RawVolumeLayout* raw_layout,
-                         const VolumeLimits& limits) {
+                         const VolumeLimits& limits, VolumeFileInfo* info) {
     auto destination = volume_io_detail::VoxelDestination::mask(range);
     volume_io_detail::read_volume_voxels(path, raw_layout, limits, destination);
+    if (info != nullptr) *info = destination.info();
     return destination.take_mask();
 }
 
-ScalarVolume read_volume_values(const std::string& path, const RawVolumeLayout* raw_layout, const VolumeLimits& limits) {
+ScalarVolume read_volume_values(const std::string& path, const RawVolumeLayout* raw_layout, const VolumeLimits& limits,
+                                VolumeFileInfo* info) {
     auto destination = volume_io_detail::VoxelDestination::values();
     volume_io_detail::read_volume_voxels(path, raw_layout, limits, destination);
+    if (info != nullptr) *info = destination.info();
     return destination.take_values();
 }
 

@@ -21,8 +21,11 @@
 
 #include <zlib.h>
 
+#include "dsreg/value_histogram.hpp"
 #include "dsreg/volume.hpp"
 #include "dsreg/volume_io.hpp"
+#include "itk_bridge.hpp"
+#include "sample_format.hpp"
 
 namespace dsreg::volume_io_detail {
 
@@ -59,6 +62,7 @@ public:
     /// Reads up to `count` bytes; fewer only at end of file (or on a read error).
     std::size_t read(std::uint8_t* destination, std::size_t count);
     void skip(std::uint64_t count);  ///< throws if the file is shorter
+    void seek(std::uint64_t offset);  ///< absolute position; throws if beyond the end
 
     [[noreturn]] void fail(const std::string& problem) const { volume_io_detail::fail(path_, problem); }
 
@@ -69,13 +73,6 @@ private:
     std::uint64_t position_ = 0;
 };
 
-/// How one voxel value is encoded in a payload.
-enum class SampleKind { Unsigned, Signed, Float };
-struct SampleFormat {
-    int bytes = 1;  ///< 1, 2, 4 or 8
-    SampleKind kind = SampleKind::Unsigned;
-    bool big_endian = false;
-};
 
 /// Decodes a stream of encoded samples, in voxel order, into either mask bytes (1 = value in
 /// `range`) or float values. Bytes may arrive in chunks of any size: a sample split between
@@ -87,28 +84,45 @@ public:
     SampleWriter(const std::string& path, SampleFormat format, const ValueRange& range, std::vector<std::uint8_t>& mask);
     /// Values: values[i] = value of voxel i, rounded to float.
     SampleWriter(const std::string& path, SampleFormat format, std::vector<float>& values);
+    /// Statistics: each of the `size` values is added to `histogram`, nothing is stored.
+    SampleWriter(const std::string& path, SampleFormat format, ValueHistogram& histogram, std::uint64_t size);
 
     /// Values above `max_value` make consume() throw (naming the file and the voxel).
     void reject_values_above(double max_value, const std::string& limit_name);
+    /// Every decoded value v becomes slope·v + intercept before it is thresholded or stored
+    /// (NIfTI's scl_slope / scl_inter). Call before the first consume().
+    void rescale(double slope, double intercept);
 
     void consume(const std::uint8_t* data, std::size_t count);
 
     std::uint64_t samples_written() const { return written_; }
+    /// Bytes still to come before every voxel has its value.
+    std::uint64_t bytes_missing() const {
+        return (size_ - written_) * static_cast<std::uint64_t>(format_.bytes) - pending_size_;
+    }
     bool complete() const { return written_ == size_ && pending_size_ == 0; }
 
 private:
     SampleWriter(const std::string& path, SampleFormat format, std::uint64_t size);
-    void emit(const std::uint8_t* sample);
+    void build_byte_tables();
+    void emit(const std::uint8_t* sample);  ///< one value, with every check (PGM's maxval)
+    /// `count` whole values, after the caller checked they fit: the fast path.
+    void decode_run(const std::uint8_t* data, std::size_t count);
+    template <typename T>
+    void decode_typed(const std::uint8_t* data, std::size_t count);
 
     std::string path_;
     SampleFormat format_;
     ValueRange range_;
-    std::uint8_t* mask_ = nullptr;  ///< exactly one of mask_ / values_ is set
+    std::uint8_t* mask_ = nullptr;  ///< exactly one of mask_ / values_ / histogram_ is set
     float* values_ = nullptr;
+    ValueHistogram* histogram_ = nullptr;
     std::uint64_t size_ = 0;
     bool use_byte_table_ = false;
     double byte_table_[256] = {};        ///< decoded value of each byte, for 1-byte samples
     std::uint8_t mask_table_[256] = {};  ///< its mask value (thresholding, 1-byte samples)
+    bool rescaled_ = false;
+    double slope_ = 1.0, intercept_ = 0.0;
     bool has_max_ = false;
     double max_value_ = 0.0;
     std::string max_name_;
@@ -127,30 +141,49 @@ class VoxelDestination {
 public:
     static VoxelDestination mask(const ValueRange& range);
     static VoxelDestination values();
+    /// Nothing stored per voxel: every value goes to `histogram` (read_value_histogram).
+    static VoxelDestination statistics(ValueHistogram& histogram);
 
-    /// Storage for `dims` voxels (spacing 1, origin 0). Throws dsreg::Error naming `path` if
-    /// the memory cannot be allocated.
+    /// Storage for `dims` voxels (spacing 1, origin 0, identity direction). Throws dsreg::Error
+    /// naming `path` if the memory cannot be allocated.
     void allocate(const std::string& path, const Index3& dims);
+    /// The grid's spacing, origin and direction (dims stay those of allocate()).
+    void set_geometry(const VoxelGrid& geometry);
+    /// Format, value type and notes, for read_volume's optional output.
+    VolumeFileInfo& info() { return info_; }
     std::uint64_t size() const { return static_cast<std::uint64_t>(grid_.voxel_count()); }
     /// Stores the value of voxel `index` (thresholded or rounded to float).
     void set(std::uint64_t index, double value) {
-        if (keep_values_)
-            values_[index] = static_cast<float>(value);
-        else
-            mask_[index] = range_.contains(value) ? 1 : 0;
+        switch (kind_) {
+        case Kind::Values: values_[index] = static_cast<float>(value); break;
+        case Kind::Mask: mask_[index] = range_.contains(value) ? 1 : 0; break;
+        case Kind::Statistics: histogram_->add(value); break;
+        }
     }
     /// A decoder of encoded samples into this destination.
     SampleWriter writer(const std::string& path, SampleFormat format);
+
+    /// An empty destination of the same kind (mask with the same range, values, statistics).
+    VoxelDestination like() const { return VoxelDestination(kind_, range_, histogram_); }
+    /// False for statistics, which do not depend on the order of the voxels.
+    bool keeps_voxel_order() const { return kind_ != Kind::Statistics; }
+    /// Copies `plane` (allocated with dims (nz, ny, 1): k fastest, then j) into the voxels
+    /// (i, j, k) of this destination, for all j, k: a transposed plane of a C-order array.
+    void store_x_plane(std::int64_t i, const VoxelDestination& plane);
 
     BinaryVolume take_mask();
     ScalarVolume take_values();
 
 private:
-    VoxelDestination(bool keep_values, const ValueRange& range) : keep_values_(keep_values), range_(range) {}
+    enum class Kind { Mask, Values, Statistics };
+    VoxelDestination(Kind kind, const ValueRange& range, ValueHistogram* histogram = nullptr)
+        : kind_(kind), range_(range), histogram_(histogram) {}
 
-    bool keep_values_;
+    Kind kind_;
     ValueRange range_;
+    ValueHistogram* histogram_;
     VoxelGrid grid_;
+    VolumeFileInfo info_;
     std::vector<std::uint8_t> mask_;
     std::vector<float> values_;
 };
@@ -164,6 +197,22 @@ void read_raw_voxels(const std::string& path, const RawVolumeLayout& layout, con
                      VoxelDestination& destination);
 void read_volume_voxels(const std::string& path, const RawVolumeLayout* raw_layout, const VolumeLimits& limits,
                         VoxelDestination& destination);
+// The medical and scientific formats (nifti_format.cpp, nrrd_format.cpp, metaimage_format.cpp,
+// npy_format.cpp; itk_bridge.hpp for those ITK decodes).
+void read_nifti_voxels(const std::string& path, const VolumeLimits& limits, VoxelDestination& destination);
+void read_nrrd_voxels(const std::string& path, const VolumeLimits& limits, VoxelDestination& destination);
+void read_metaimage_voxels(const std::string& path, const VolumeLimits& limits, VoxelDestination& destination);
+void read_npy_voxels(const std::string& path, const VolumeLimits& limits, VoxelDestination& destination);
+// Images ITK decodes (itk_volume_io.cpp): header checks, then the voxels in slabs of slices when
+// ITK can stream the format, else in one piece; a DICOM series slab by slab.
+void read_itk_voxels(const std::string& path, ItkFormat format, const VolumeLimits& limits, VoxelDestination& destination);
+void read_dicom_series_voxels(const std::string& folder, const VolumeLimits& limits, VoxelDestination& destination);
+
+/// Every format dsreg reads, told from the file name (compound extensions such as .nii.gz
+/// included) or, for a folder, a DICOM series.
+enum class VolumeFormat { Vol, Longvol, Pgm3d, Raw, Nifti, Nrrd, MetaImage, Npy, Tiff, Hdf5, VtkImage, DicomFile, DicomSeries };
+/// Throws dsreg::Error naming `path` for an unknown or missing extension.
+VolumeFormat volume_format(const std::string& path);
 
 /// "5x4x3 = 60 voxels" or, for wider samples, "5x4x3 = 60 voxels x 8 bytes = 480 bytes".
 std::string describe_payload(const Index3& dims, std::int64_t voxels, int bytes_per_value);
@@ -180,11 +229,56 @@ void require_plausible_zlib_payload(const InputFile& file, std::uint64_t expecte
 
 /// Feeds the rest of the file (exactly the expected size, already checked) to `sink`.
 void decode_stored_payload(InputFile& file, SampleWriter& sink);
+/// Feeds the next bytes of the file to `sink` until it is complete; what follows is not read.
+void decode_stored_prefix(InputFile& file, SampleWriter& sink);
 
 /// Inflates the zlib stream filling the rest of the file into `sink`, with a hard cap at
 /// `expected_bytes`: more output, less output, a corrupt stream or bytes after the end of the
 /// stream all throw, naming the file.
 void decode_zlib_payload(InputFile& file, std::uint64_t expected_bytes, SampleWriter& sink, const std::string& description);
+
+/// The container of a deflate stream: zlib (RFC 1950), gzip (RFC 1952, several members allowed),
+/// or either, told by its first bytes.
+enum class CompressedContainer { Zlib, Gzip, ZlibOrGzip };
+
+/// At most this many bytes can a deflate stream of `compressed` bytes inflate to (1032:1, plus
+/// a little slack for headers and checksums).
+std::uint64_t max_inflated_size(std::uint64_t compressed);
+
+/// The inflated bytes of the compressed stream that fills the rest of `file`, read in order.
+/// Every failure throws dsreg::Error naming the file: corrupt data, or the file ending inside
+/// the stream ("truncated payload: <context>, but the gzip stream is cut off after ...").
+class InflateStream {
+public:
+    InflateStream(InputFile& file, CompressedContainer container);
+    ~InflateStream();
+    InflateStream(const InflateStream&) = delete;
+    InflateStream& operator=(const InflateStream&) = delete;
+
+    /// Inflates up to `count` bytes; fewer only once the (last) stream has ended.
+    std::size_t read(std::uint8_t* destination, std::size_t count, const std::string& context);
+    /// Discards `count` inflated bytes; throws if the stream ends before.
+    void skip(std::uint64_t count, const std::string& context);
+    /// Feeds exactly `count` inflated bytes to `sink`; throws if the stream ends before.
+    void decode(std::uint64_t count, SampleWriter& sink, const std::string& context);
+
+    std::uint64_t produced() const { return produced_; }
+    bool ended() const { return ended_; }
+    /// Compressed bytes not consumed yet (buffered, plus the rest of the file).
+    std::uint64_t unread_input() const;
+    const char* name() const;  ///< "zlib" or "gzip", for messages
+
+private:
+    void refill();
+    bool next_member_follows();
+
+    InputFile& file_;
+    CompressedContainer container_;
+    z_stream stream_{};
+    std::vector<std::uint8_t> input_;
+    std::uint64_t produced_ = 0;
+    bool ended_ = false;
+};
 
 /// Writes a payload to a stream, either as is or as one zlib stream (what zlib's compress()
 /// would produce), in bounded chunks.

@@ -1,0 +1,426 @@
+// Medical and scientific image formats (dsreg/volume_io.hpp): NIfTI, NRRD, MetaImage, TIFF, HDF5,
+// VTK, DICOM (written by ITK's own writers), NumPy .npy; geometry as ITK reads it, every value
+// type, and the rejection of hostile or unsupported files with a message naming the file.
+#include <gtest/gtest.h>
+#include <zlib.h>
+
+#include <cstring>
+#include <fstream>
+#include <functional>
+
+#include "dsreg/error.hpp"
+#include "dsreg/volume_io.hpp"
+#include "medical_test_support.hpp"
+
+using namespace dsreg;
+using dsreg::test::ScratchFolder;
+
+namespace {
+
+const RawVoxelType kAllTypes[] = {RawVoxelType::UInt8,  RawVoxelType::Int8,   RawVoxelType::UInt16, RawVoxelType::Int16,
+                                  RawVoxelType::UInt32, RawVoxelType::Int32,  RawVoxelType::UInt64, RawVoxelType::Int64,
+                                  RawVoxelType::Float32, RawVoxelType::Float64};
+
+std::string type_name(RawVoxelType type) {
+    const char* names[] = {"uint8", "int8", "uint16", "int16", "uint32", "int32", "uint64", "int64", "float32", "float64"};
+    return names[static_cast<int>(type)];
+}
+
+/// Values every type can hold exactly, with negative ones for signed types.
+std::vector<double> test_values(const Index3& dims, RawVoxelType type) {
+    const bool is_signed = type == RawVoxelType::Int8 || type == RawVoxelType::Int16 || type == RawVoxelType::Int32 ||
+                           type == RawVoxelType::Int64 || type == RawVoxelType::Float32 || type == RawVoxelType::Float64;
+    std::vector<double> values;
+    for (std::int64_t n = 0; n < dims[0] * dims[1] * dims[2]; ++n) values.push_back(double((n * 37) % 101) - (is_signed ? 50 : 0));
+    return values;
+}
+
+void expect_error(const std::function<void()>& action, const std::string& path, const std::string& fragment) {
+    try {
+        action();
+        ADD_FAILURE() << "no error for " << path;
+    } catch (const Error& error) {
+        const std::string message = error.what();
+        EXPECT_EQ(message.rfind(path + ": ", 0), 0u) << message;
+        EXPECT_NE(message.find(fragment), std::string::npos) << "'" << fragment << "' not in: " << message;
+    }
+}
+
+void expect_same_grid(const VoxelGrid& read, const VoxelGrid& written, double tolerance) {
+    EXPECT_EQ(read.dims, written.dims);
+    EXPECT_LT((read.spacing - written.spacing).cwiseAbs().maxCoeff(), tolerance);
+    EXPECT_LT((read.origin - written.origin).cwiseAbs().maxCoeff(), tolerance);
+    EXPECT_LT((read.direction - written.direction).cwiseAbs().maxCoeff(), tolerance);
+}
+
+std::string read_bytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+void write_bytes(const std::string& path, const std::string& bytes) {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out << bytes;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Round trips through ITK's writers: mask, values and geometry
+
+struct FormatCase {
+    const char* name;
+    double geometry_tolerance;  ///< NIfTI stores geometry in float32
+    bool keeps_direction;       ///< TIFF and VTK legacy images have no direction cosines
+    bool keeps_origin;          ///< TIFF has no origin, and no slice spacing (read as 1)
+};
+
+const FormatCase kFormats[] = {
+    {"a.nii", 1e-5, true, true},   {"a.nii.gz", 1e-5, true, true}, {"a.hdr", 1e-5, true, true},
+    {"a.nrrd", 1e-12, true, true}, {"a.nhdr", 1e-12, true, true},  {"a.mha", 1e-12, true, true},
+    {"a.mhd", 1e-12, true, true},  {"a.h5", 1e-12, true, true},    {"a.vtk", 1e-12, false, true},
+    {"a.tif", 1e-6, false, false},
+};
+
+TEST(MedicalIo, EveryFormatRoundTripsTheMaskAndTheGeometry) {
+    ScratchFolder scratch("medical-roundtrip");
+    const VoxelGrid grid = test::oblique_grid({24, 20, 16});
+    const std::vector<double> labels = test::sample_ellipsoid(grid, test::test_ellipsoid(grid), 3);
+    for (const FormatCase& format : kFormats) {
+        SCOPED_TRACE(format.name);
+        const std::string path = scratch.path(format.name);
+        write_image(path, grid, labels, RawVoxelType::UInt8);
+        VolumeFileInfo info;
+        const BinaryVolume volume = read_volume(path, {}, nullptr, {}, &info);
+        EXPECT_EQ(info.value_type, "uint8");
+        ASSERT_EQ(volume.mask.size(), labels.size());
+        std::int64_t inside = 0;
+        for (std::size_t n = 0; n < labels.size(); ++n) {
+            EXPECT_EQ(volume.mask[n], labels[n] > 0 ? 1 : 0) << "voxel " << n;
+            inside += labels[n] > 0;
+        }
+        EXPECT_GT(inside, 100);
+        VoxelGrid expected = grid;
+        if (!format.keeps_direction) expected.direction.setIdentity();
+        if (!format.keeps_origin) {
+            expected.origin.setZero();
+            expected.spacing.z() = 1;
+        }
+        expect_same_grid(volume.grid, expected, format.geometry_tolerance);
+        // Whatever the format, the direction the pipeline gets is orthonormal.
+        EXPECT_LT((volume.grid.direction.transpose() * volume.grid.direction - Eigen::Matrix3d::Identity()).norm(), 1e-12);
+    }
+}
+
+TEST(MedicalIo, EveryValueTypeInNiftiNrrdMetaImageAndNpy) {
+    ScratchFolder scratch("medical-types");
+    VoxelGrid grid;
+    grid.dims = {5, 4, 3};
+    ValueRange range;
+    range.has_min = true;
+    range.min = 7;
+    range.has_max = true;
+    range.max = 30;
+    for (const RawVoxelType type : kAllTypes) {
+        const std::vector<double> values = test_values(grid.dims, type);
+        for (const char* extension : {"nii.gz", "nrrd", "mha", "npy"}) {
+            const std::string path = scratch.path(type_name(type) + "." + extension);
+            SCOPED_TRACE(path);
+            if (std::string(extension) == "npy")
+                write_npy(path, grid.dims, values, type);
+            else
+                write_image(path, grid, values, type);
+            VolumeFileInfo info;
+            const ScalarVolume read = read_volume_values(path, nullptr, {}, &info);
+            EXPECT_EQ(info.value_type, type_name(type));
+            ASSERT_EQ(read.values.size(), values.size());
+            for (std::size_t n = 0; n < values.size(); ++n) EXPECT_EQ(read.values[n], float(values[n])) << "voxel " << n;
+            const BinaryVolume mask = read_volume(path, range);
+            for (std::size_t n = 0; n < values.size(); ++n) EXPECT_EQ(mask.mask[n], range.contains(values[n]) ? 1 : 0);
+        }
+    }
+}
+
+TEST(MedicalIo, NpyFortranAndCOrderGiveTheSameVoxels) {
+    ScratchFolder scratch("medical-npy");
+    const Index3 dims{6, 5, 4};
+    const std::vector<double> values = test_values(dims, RawVoxelType::Int16);
+    write_npy(scratch.path("c.npy"), dims, values, RawVoxelType::Int16, false);
+    write_npy(scratch.path("f.npy"), dims, values, RawVoxelType::Int16, true);
+    const ScalarVolume c = read_volume_values(scratch.path("c.npy"));
+    const ScalarVolume f = read_volume_values(scratch.path("f.npy"));
+    EXPECT_EQ(c.grid.dims, dims);
+    EXPECT_EQ(f.grid.dims, dims);
+    for (std::size_t n = 0; n < values.size(); ++n) {
+        EXPECT_EQ(c.values[n], float(values[n]));
+        EXPECT_EQ(f.values[n], float(values[n]));
+    }
+    // The C-order file really stores k fastest: a[0, 0, 1] is its second value.
+    const std::string bytes = read_bytes(scratch.path("c.npy"));
+    std::int16_t second = 0;
+    std::memcpy(&second, bytes.data() + 128 + 2, 2);
+    VoxelGrid g;
+    g.dims = dims;
+    EXPECT_EQ(second, std::int16_t(values[std::size_t(g.linear_index(0, 0, 1))]));
+}
+
+TEST(MedicalIo, DicomSeriesRoundTripsTheMaskAndTheGeometry) {
+    ScratchFolder scratch("medical-dicom");
+    const VoxelGrid grid = test::oblique_grid({20, 18, 12});
+    const std::vector<double> labels = test::sample_ellipsoid(grid, test::test_ellipsoid(grid), 1);
+    write_dicom_series(scratch.folder(), grid, labels, RawVoxelType::UInt16);
+    VolumeFileInfo info;
+    const BinaryVolume volume = read_volume(scratch.folder(), {}, nullptr, {}, &info);
+    EXPECT_EQ(info.format, "DICOM series");
+    expect_same_grid(volume.grid, grid, 1e-6);
+    ASSERT_EQ(volume.mask.size(), labels.size());
+    for (std::size_t n = 0; n < labels.size(); ++n) ASSERT_EQ(volume.mask[n], labels[n] > 0 ? 1 : 0) << "voxel " << n;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Unsupported images
+
+TEST(MedicalIo, FourDimensionalAndVectorImagesAreRejectedClearly) {
+    ScratchFolder scratch("medical-4d");
+    // A 4-D NIfTI (3 time points) and a vector image, as nibabel would write them: own header bytes.
+    const auto nifti = [&](const std::string& name, std::int16_t rank, std::int16_t t, std::int16_t components) {
+        std::string header(352, '\0');
+        const auto put16 = [&](std::size_t at, std::int16_t v) { std::memcpy(&header[at], &v, 2); };
+        const auto put32f = [&](std::size_t at, float v) { std::memcpy(&header[at], &v, 4); };
+        const std::int32_t size = 348;
+        std::memcpy(&header[0], &size, 4);
+        put16(40, rank);
+        put16(42, 4), put16(44, 3), put16(46, 2), put16(48, t), put16(50, components);
+        put16(70, 2), put16(72, 8);
+        for (int d = 0; d < 8; ++d) put32f(76 + 4 * d, 1.0f);
+        put32f(108, 352.0f);
+        std::memcpy(&header[344], "n+1\0", 4);
+        write_bytes(scratch.path(name), header + std::string(std::size_t(4 * 3 * 2 * t * components), '\1'));
+    };
+    nifti("time.nii", 4, 3, 1);
+    expect_error([&] { read_volume(scratch.path("time.nii")); }, scratch.path("time.nii"), "4-D image");
+    nifti("vector.nii", 5, 1, 3);
+    expect_error([&] { read_volume(scratch.path("vector.nii")); }, scratch.path("vector.nii"), "vector image with 3 values per voxel");
+    // A 4-D NIfTI with a single volume is a 3-D image.
+    nifti("one.nii", 4, 1, 1);
+    EXPECT_EQ(read_volume(scratch.path("one.nii")).grid.dims, (Index3{4, 3, 2}));
+
+    // A vector NRRD (3 components per voxel, the way ITK writes a vector image).
+    write_bytes(scratch.path("vector.nrrd"), "NRRD0004\ntype: uint8\ndimension: 4\nsizes: 3 4 3 2\nkinds: vector domain domain domain\n"
+                                             "encoding: raw\nspace: left-posterior-superior\n\n" +
+                                                 std::string(3 * 4 * 3 * 2, '\1'));
+    expect_error([&] { read_volume(scratch.path("vector.nrrd")); }, scratch.path("vector.nrrd"), "3 values per voxel");
+    write_bytes(scratch.path("time.nrrd"), "NRRD0004\ntype: uint8\ndimension: 4\nsizes: 4 3 2 5\nencoding: raw\n\n" +
+                                               std::string(4 * 3 * 2 * 5, '\1'));
+    expect_error([&] { read_volume(scratch.path("time.nrrd")); }, scratch.path("time.nrrd"), "4-D image");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hostile files: a message naming the file, nothing allocated from a lying header
+
+TEST(MedicalIo, TruncatedNiftiGzIsRejected) {
+    ScratchFolder scratch("medical-truncated");
+    const VoxelGrid grid = test::oblique_grid({24, 20, 16});
+    const std::vector<double> values = test_values(grid.dims, RawVoxelType::Float32);
+    const std::string path = scratch.path("cut.nii.gz");
+    write_image(path, grid, values, RawVoxelType::Float32);
+    const std::string bytes = read_bytes(path);
+    write_bytes(path, bytes.substr(0, bytes.size() / 2));
+    expect_error([&] { read_volume(path); }, path, "truncated payload");
+    write_bytes(path, bytes.substr(0, 100));
+    expect_error([&] { read_volume(path); }, path, "truncated");
+    write_bytes(path, bytes.substr(0, 10));
+    expect_error([&] { read_volume(path); }, path, "cut off");
+}
+
+TEST(MedicalIo, LyingNrrdHeaderIsRejectedBeforeAllocating) {
+    ScratchFolder scratch("medical-lying");
+    // Claims 2000³ int16 voxels (16 GB) with 10 bytes of raw data, then of gzip data.
+    const std::string header = "NRRD0004\ntype: short\ndimension: 3\nsizes: 2000 2000 2000\nendian: little\n";
+    write_bytes(scratch.path("raw.nrrd"), header + "encoding: raw\n\n0123456789");
+    expect_error([&] { read_volume(scratch.path("raw.nrrd")); }, scratch.path("raw.nrrd"), "truncated payload");
+    write_bytes(scratch.path("gz.nrrd"), header + "encoding: gzip\n\n0123456789");
+    expect_error([&] { read_volume(scratch.path("gz.nrrd")); }, scratch.path("gz.nrrd"), "truncated or lying header");
+    // Dimensions beyond the voxel limit.
+    write_bytes(scratch.path("huge.nrrd"), "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 100000 100000 100000\nencoding: raw\n\nx");
+    expect_error([&] { read_volume(scratch.path("huge.nrrd")); }, scratch.path("huge.nrrd"), "exceed the limit");
+    // A detached header naming a missing data file.
+    write_bytes(scratch.path("detached.nhdr"), "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: raw\ndata file: gone.raw\n");
+    expect_error([&] { read_volume(scratch.path("detached.nhdr")); }, scratch.path("detached.nhdr"), "gone.raw (data file) does not exist");
+    // --max-voxels is honoured before the payload is read.
+    write_bytes(scratch.path("small.nrrd"), "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 4 4 4\nencoding: raw\n\n" + std::string(64, '\1'));
+    VolumeLimits limits;
+    limits.max_voxels = 63;
+    expect_error([&] { read_volume(scratch.path("small.nrrd"), {}, nullptr, limits); }, scratch.path("small.nrrd"),
+                 "exceed the limit of 63 voxels");
+    EXPECT_EQ(read_volume(scratch.path("small.nrrd")).object_voxel_count(), 64);
+}
+
+TEST(MedicalIo, MetaImageWithoutItsDataFileIsRejected) {
+    ScratchFolder scratch("medical-mhd");
+    VoxelGrid grid;
+    grid.dims = {6, 5, 4};
+    const std::string path = scratch.path("a.mhd");
+    write_image(path, grid, test_values(grid.dims, RawVoxelType::UInt8), RawVoxelType::UInt8, false);
+    EXPECT_EQ(read_volume(path).grid.dims, grid.dims);
+    for (const std::string& name : scratch.entries())
+        if (name != "a.mhd") std::filesystem::remove(scratch.path(name));
+    expect_error([&] { read_volume(path); }, path, "does not exist");
+    // A LOCAL MetaImage whose payload is cut short, and one whose compressed payload lies.
+    write_bytes(scratch.path("short.mha"),
+                "ObjectType = Image\nNDims = 3\nDimSize = 10 10 10\nElementType = MET_USHORT\nElementDataFile = LOCAL\n" +
+                    std::string(100, '\0'));
+    expect_error([&] { read_volume(scratch.path("short.mha")); }, scratch.path("short.mha"), "truncated payload");
+    write_bytes(scratch.path("bomb.mha"), "ObjectType = Image\nNDims = 3\nDimSize = 1000 1000 1000\nElementType = MET_UCHAR\n"
+                                          "CompressedData = True\nElementDataFile = LOCAL\nxxxx");
+    expect_error([&] { read_volume(scratch.path("bomb.mha")); }, scratch.path("bomb.mha"), "truncated or lying header");
+}
+
+TEST(MedicalIo, MalformedHeadersGetMessagesNamingTheFile) {
+    ScratchFolder scratch("medical-malformed");
+    const std::vector<std::pair<std::string, std::string>> files = {
+        {"empty.nii", ""},
+        {"garbage.nii", std::string(400, 'x')},
+        {"garbage.nii.gz", "not gzip at all"},
+        {"garbage.nrrd", "NRRD9\nstuff\n"},
+        {"nosizes.nrrd", "NRRD0004\ntype: uchar\ndimension: 3\nencoding: raw\n\n"},
+        {"bzip.nrrd", "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: bzip2\n\n"},
+        {"garbage.mha", "hello\n"},
+        {"garbage.npy", "\x93NUMPY\x01\x00\x10\x00{'descr': '<x9'}"},
+        {"garbage.tif", "II*\0garbage"},
+        {"garbage.h5", "not hdf5"},
+        {"garbage.vtk", "# vtk DataFile Version 3.0\nnothing\n"},
+    };
+    for (const auto& [name, bytes] : files) {
+        SCOPED_TRACE(name);
+        write_bytes(scratch.path(name), bytes);
+        try {
+            read_volume(scratch.path(name));
+            ADD_FAILURE() << "accepted";
+        } catch (const Error& error) {
+            const std::string message = error.what();
+            EXPECT_EQ(message.rfind(scratch.path(name) + ": ", 0), 0u) << message;
+            EXPECT_EQ(message.find("ITK ERROR"), std::string::npos) << message;
+            EXPECT_EQ(message.find(".cxx:"), std::string::npos) << message;
+        }
+    }
+    const std::string empty_folder = scratch.path("no-dicom");
+    std::filesystem::create_directories(empty_folder);
+    expect_error([&] { read_volume(empty_folder); }, empty_folder, "no DICOM image series");
+}
+
+// ---------------------------------------------------------------------------------------------
+// NIfTI geometry: dsreg's own rules (NIfTI-2, sforms ITK refuses) against ITK's (NIfTI-1)
+
+/// A NIfTI-1 or NIfTI-2 file of 4×3×2 uint8 voxels with the given transforms.
+struct NiftiFields {
+    int qform_code = 0, sform_code = 0;
+    float pixdim[4] = {1, 0.75f, 1.0f, 1.25f};  ///< qfac, dx, dy, dz
+    float quatern[3] = {0, 0, 0};
+    float qoffset[3] = {0, 0, 0};
+    float srow[3][4] = {{0.75f, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1.25f, 0}};
+};
+
+std::string nifti_file(const NiftiFields& f, int version) {
+    const std::size_t header_size = version == 1 ? 348 : 540, offset = version == 1 ? 352 : 544;
+    std::string h(offset, '\0');
+    const auto put = [&](std::size_t at, auto value) { std::memcpy(&h[at], &value, sizeof value); };
+    put(0, std::int32_t(header_size));
+    if (version == 1) {
+        put(40, std::int16_t(3)), put(42, std::int16_t(4)), put(44, std::int16_t(3)), put(46, std::int16_t(2));
+        for (int d = 4; d < 8; ++d) put(40 + 2 * d, std::int16_t(1));
+        put(70, std::int16_t(2)), put(72, std::int16_t(8));
+        for (int d = 0; d < 4; ++d) put(76 + 4 * d, f.pixdim[d]);
+        put(108, float(offset));
+        put(112, 1.0f);
+        put(252, std::int16_t(f.qform_code)), put(254, std::int16_t(f.sform_code));
+        for (int i = 0; i < 3; ++i) put(256 + 4 * i, f.quatern[i]), put(268 + 4 * i, f.qoffset[i]);
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 4; ++c) put(280 + 16 * r + 4 * c, f.srow[r][c]);
+        std::memcpy(&h[344], "n+1\0", 4);
+    } else {
+        std::memcpy(&h[4], "n+2\0\r\n\032\n", 8);
+        put(12, std::int16_t(2)), put(14, std::int16_t(8));
+        put(16, std::int64_t(3)), put(24, std::int64_t(4)), put(32, std::int64_t(3)), put(40, std::int64_t(2));
+        for (int d = 4; d < 8; ++d) put(16 + 8 * d, std::int64_t(1));
+        for (int d = 0; d < 4; ++d) put(104 + 8 * d, double(f.pixdim[d]));
+        put(168, std::int64_t(offset));
+        put(176, 1.0);
+        put(344, std::int32_t(f.qform_code)), put(348, std::int32_t(f.sform_code));
+        for (int i = 0; i < 3; ++i) put(352 + 8 * i, double(f.quatern[i])), put(376 + 8 * i, double(f.qoffset[i]));
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 4; ++c) put(400 + 32 * r + 8 * c, double(f.srow[r][c]));
+    }
+    std::string voxels(24, '\0');
+    for (int n = 0; n < 24; ++n) voxels[std::size_t(n)] = char(n % 3);
+    return h + voxels;
+}
+
+TEST(MedicalIo, Nifti2GeometryFollowsItksRulesForNifti1) {
+    ScratchFolder scratch("medical-nifti2");
+    std::vector<std::pair<std::string, NiftiFields>> cases;
+    NiftiFields none;
+    cases.emplace_back("no transform", none);
+    NiftiFields qform;  // rotation about an oblique axis, left-handed (qfac = -1)
+    qform.qform_code = 1;
+    qform.pixdim[0] = -1;
+    qform.quatern[0] = 0.2f, qform.quatern[1] = -0.3f, qform.quatern[2] = 0.1f;
+    qform.qoffset[0] = -12.5f, qform.qoffset[1] = 30.25f, qform.qoffset[2] = 4;
+    cases.emplace_back("qform", qform);
+    NiftiFields sform;
+    sform.sform_code = 2;
+    const Eigen::Matrix3d r = test::rotation(25, Eigen::Vector3d(1, 2, 3));
+    for (int row = 0; row < 3; ++row) {
+        for (int c = 0; c < 3; ++c) sform.srow[row][c] = float(r(row, c) * sform.pixdim[c + 1]);
+        sform.srow[row][3] = float(row * 7.5 - 3);
+    }
+    cases.emplace_back("sform", sform);
+    NiftiFields both_differ = qform;  // ITK takes the qform when an aligned sform disagrees
+    both_differ.sform_code = 2;
+    std::memcpy(both_differ.srow, sform.srow, sizeof sform.srow);
+    cases.emplace_back("both, sform code 2", both_differ);
+    NiftiFields scanner = both_differ;  // and the sform when it is SCANNER_ANAT
+    scanner.sform_code = 1;
+    cases.emplace_back("both, sform code 1", scanner);
+    for (const auto& [name, fields] : cases) {
+        SCOPED_TRACE(name);
+        write_bytes(scratch.path("one.nii"), nifti_file(fields, 1));
+        write_bytes(scratch.path("two.nii"), nifti_file(fields, 2));
+        VolumeFileInfo info1, info2;
+        const BinaryVolume one = read_volume(scratch.path("one.nii"), {}, nullptr, {}, &info1);  // ITK's geometry
+        const BinaryVolume two = read_volume(scratch.path("two.nii"), {}, nullptr, {}, &info2);  // dsreg's
+        EXPECT_EQ(info1.format, "NIfTI-1");
+        EXPECT_EQ(info2.format, "NIfTI-2");
+        expect_same_grid(two.grid, one.grid, 1e-6);
+        EXPECT_EQ(one.mask, two.mask);
+    }
+}
+
+TEST(MedicalIo, SlightlyShearedSformIsOrthonormalizedAndAStrongShearRejected) {
+    ScratchFolder scratch("medical-shear");
+    NiftiFields slight;
+    slight.sform_code = 2;
+    slight.srow[0][1] = 0.0005f;  // ITK 5.2 refuses this file; dsreg orthonormalizes it and says so
+    write_bytes(scratch.path("slight.nii"), nifti_file(slight, 1));
+    VolumeFileInfo info;
+    const BinaryVolume volume = read_volume(scratch.path("slight.nii"), {}, nullptr, {}, &info);
+    ASSERT_FALSE(info.notes.empty());
+    EXPECT_NE(info.notes.front().find("not orthonormal"), std::string::npos);
+    EXPECT_LT((volume.grid.direction.transpose() * volume.grid.direction - Eigen::Matrix3d::Identity()).norm(), 1e-12);
+    NiftiFields strong = slight;
+    strong.srow[0][1] = 0.2f;  // 11 degrees of shear
+    write_bytes(scratch.path("strong.nii"), nifti_file(strong, 1));
+    expect_error([&] { read_volume(scratch.path("strong.nii")); }, scratch.path("strong.nii"), "not orthonormal");
+}
+
+TEST(MedicalIo, NiftiScaleSlopeIsApplied) {
+    ScratchFolder scratch("medical-slope");
+    NiftiFields fields;
+    std::string bytes = nifti_file(fields, 1);
+    const float slope = 2.5f, intercept = -1.0f;
+    std::memcpy(&bytes[112], &slope, 4);
+    std::memcpy(&bytes[116], &intercept, 4);
+    write_bytes(scratch.path("scaled.nii"), bytes);
+    const ScalarVolume values = read_volume_values(scratch.path("scaled.nii"));
+    for (int n = 0; n < 24; ++n) EXPECT_EQ(values.values[std::size_t(n)], float((n % 3) * 2.5 - 1.0));
+}
+
+}  // namespace
