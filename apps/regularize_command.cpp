@@ -77,7 +77,7 @@ void add_normal_field_options(CLI::App& cmd, NormalFieldOptions& o, PipelineOutp
     cmd.add_option("--ii-max-radius", o.max_radius,
                    "Largest radius of the adaptive integral invariants (the default field), physical units: each "
                    "surfel's radius follows the local reach of the object and of the background, from 2 voxels up to "
-                   "this; extrapolated from 6 voxels up (docs/accuracy.md). Default 10 voxels");
+                   "this; extrapolated from 6 voxels up (docs/accuracy.md). Default 14 voxels");
     cmd.add_option("--ii-kernel", o.ii_kernel,
                    "Weights of the integral-invariant ball: biweight (1 - d^2/r^2)^2, smooth, more accurate "
                    "(docs/accuracy.md), or ball (uniform, the paper's integral invariants)")

@@ -42,7 +42,7 @@ TEST(Pipeline, EqualsTheStagesCalledByHand) {
     // their reach (reference 12 voxels), the solve, the shrink correction (40 steps).
     const DigitalSurface surface = extract_digital_surface(loaded.volume, Connectivity::TwentySix);
     const AdaptiveNormalOptions adaptive = default_adaptive_options(options.normals, loaded);
-    EXPECT_DOUBLE_EQ(adaptive.max_radius, 10.0);  // voxels of a file
+    EXPECT_DOUBLE_EQ(adaptive.max_radius, 14.0);  // voxels of a file
     const AdaptiveNormalField field = adaptive_integral_invariant_normals(loaded.volume, surface, adaptive);
     RegularizationWeights weights;
     weights.vertex_alpha = thin_part_alpha(surface, field.reach.smallest(), 12.0);

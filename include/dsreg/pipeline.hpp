@@ -121,7 +121,7 @@ void parse_epsilon_range(const std::string& text, AmbrosioTortorelliParameters& 
 void check_normal_field_options(const NormalFieldOptions& options, bool input_is_shape);
 
 /// The default field, `--normals ii` without --radius or --ii-extrapolate, is the adaptive one
-/// (adaptive_normals.hpp) with these radii (physical units): the largest 10 voxels (--ii-max-radius),
+/// (adaptive_normals.hpp) with these radii (physical units): the largest 14 voxels (--ii-max-radius),
 /// the smallest 2 voxels (of the smallest spacing), 1.5 times the reach, extrapolated from 6 voxels up, 4 smoothing steps
 /// below 5 voxels; voxel = the largest spacing.
 AdaptiveNormalOptions default_adaptive_options(const NormalFieldOptions& options, const LoadedVolume& loaded);
