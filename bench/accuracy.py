@@ -18,11 +18,14 @@ is each figure of dsreg <= the best of Slicer's (same run) and DGtal's.
 
   /usr/bin/python3 bench/accuracy.py [--dsreg build/dsreg] [--cases REGEX] [--dsreg-args "..."]
                                      [--write-docs docs/accuracy.md] [--json results.json] [--keep DIR]
+                                     [--resume]
 
 With --write-docs the Markdown table replaces the lines between the markers
 "<!-- accuracy-suite:begin -->" and "<!-- accuracy-suite:end -->" of that file. Run it with
 Debian's /usr/bin/python3 (python3-vtk9, numpy); one case at a time (the machine's cores go to
-each tool in turn). bench/accuracy.sh builds dsreg and runs this with the docs table.
+each tool in turn). bench/accuracy.sh builds dsreg and runs this with the docs table. The JSON file
+is rewritten after every case; with --resume the cases already in it are not run again (a run cut
+short goes on where it stopped, and runs of a few --cases each add up to one table).
 """
 import argparse
 import datetime
@@ -220,9 +223,10 @@ def markdown(results, meta):
     def number(value, pattern):
         return "—" if value is None else pattern % value
 
+    tool_seconds = sum(r[t]["wall_seconds"] for r in results for t in ("dsreg", "slicer"))
     lines = [f"Run {meta['date']} on commit {meta['commit']}, dsreg options: `{meta['dsreg_args'] or 'none (defaults)'}`; "
-             f"load average {meta['load_before']} before, {meta['load_after']} after; "
-             f"{meta['seconds']:.0f} s in all. `bench/accuracy.sh` reproduces it.",
+             f"load average {meta['load_before']:.1f} before, {meta['load_after']:.1f} after; "
+             f"{tool_seconds:.0f} s of dsreg and Slicer wall time in all. `bench/accuracy.sh` reproduces it.",
              "",
              "Each cell: dsreg / Slicer pipeline (flying edges + windowed sinc). Distance: mean vertex distance to "
              "the true surface in units of h; normal: mean face-normal error; object, boundary: voxel centres "
@@ -250,6 +254,12 @@ def markdown(results, meta):
     return "\n".join(lines) + "\n"
 
 
+def write_json(path, meta, results):
+    with open(path + ".tmp", "w") as f:
+        json.dump({"meta": meta, "results": results}, f, indent=1)
+    os.replace(path + ".tmp", path)
+
+
 def write_docs(path, table):
     with open(path) as f:
         text = f.read()
@@ -271,14 +281,25 @@ def main():
     parser.add_argument("--write-docs", help="replace the table between the markers of this Markdown file")
     parser.add_argument("--json", help="write every figure here")
     parser.add_argument("--keep", help="copy each case's volume and meshes into this folder")
+    parser.add_argument("--resume", action="store_true", help="keep the cases already in the --json file")
     args = parser.parse_args()
+    if args.resume and not args.json:
+        parser.error("--resume needs --json")
 
     start = time.perf_counter()
     meta = {"date": datetime.datetime.utcnow().strftime("%Y-%m-%d %H:%M UTC"),
             "commit": run(["git", "-C", REPO, "rev-parse", "--short", "HEAD"]).strip(),
             "dsreg_args": args.dsreg_args, "load_before": os.getloadavg()[0]}
+    done, done_meta = {}, None
+    if args.resume and os.path.exists(args.json):
+        with open(args.json) as f:
+            stored = json.load(f)
+        done, done_meta = {r["case"]: r for r in stored["results"]}, stored["meta"]
     results = []
     for name, group, note, make, where in cases(args):
+        if name in done:
+            results.append(done[name])
+            continue
         if not re.search(args.cases, name):
             continue
         with tempfile.TemporaryDirectory() as work:
@@ -291,10 +312,14 @@ def main():
               f"fold {d['folded_faces']} | slicer {s.get('distance_h', float('nan')):.3f}h "
               f"{s.get('normal_deg', float('nan')):6.2f}° obj {100 * s['object_share']:6.2f}% si {s['intersecting_pairs']}"
               f" | {verdict(result)}", flush=True)
+        if args.json:  # the cases kept from the file but not reached yet too
+            reached = {r["case"] for r in results}
+            write_json(args.json, meta, results + [r for r in done.values() if r["case"] not in reached])
     meta.update(seconds=time.perf_counter() - start, load_after=os.getloadavg()[0])
+    if done_meta and all(r["case"] in done for r in results):
+        meta = done_meta  # nothing run now: the table is the stored run's
     if args.json:
-        with open(args.json, "w") as f:
-            json.dump({"meta": meta, "results": results}, f, indent=1)
+        write_json(args.json, meta, results)
     table = markdown(results, meta)
     if args.write_docs:
         write_docs(args.write_docs, table)
