@@ -2,31 +2,22 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
-#include <optional>
-#include <string>
-#include <vector>
 
-#include "dsreg/implicit_shape.hpp"
+#include "dsreg/evaluation_report.hpp"
 
 namespace dsreg::cli {
 
-/// The ground-truth shape of `eval` and `convergence`: a named shape, a polynomial, or "plane"
-/// (the tilted half-space n·p ≤ d clipped by the box [-B, B]³, make_plane_shape).
-struct TruthShapeOptions {
-    std::string shape;
-    std::optional<double> box;  ///< polynomial: default 10 (as `regularize --box`); plane: default 1
-    std::vector<double> plane_normal{1.0, 1.4142135623730951, 1.7320508075688772};  ///< (1, √2, √3)
-    double plane_offset = 0.01;
-};
-
 /// Registers --shape, --box, --plane-normal, --plane-offset on `command`; returns --shape (for
-/// commands that require it).
+/// the commands that require it: eval takes --volume instead).
 CLI::Option* add_truth_shape_options(CLI::App& command, TruthShapeOptions& options);
 
-/// Builds the shape. Throws dsreg::Error for an unknown shape or bad plane parameters.
-ImplicitShape make_truth_shape(const TruthShapeOptions& options);
+/// Registers the flags of the evaluation on `command`: the truth shape's, --volume, --min, --max,
+/// --voxel-coordinates, --face-errors, --h, --wall-margin, --volume-cells (not the mesh file, not
+/// --json). The one definition of these flags: `dsreg eval` and the Python module's
+/// dsreg.evaluate keywords both parse them.
+void add_evaluation_flags(CLI::App& command, EvaluationRequest& request);
 
-/// Registers the `eval` subcommand (truth: --shape, or --volume for a volume file) on `app`.
+/// Registers the `eval` subcommand on `app`.
 void add_eval_command(CLI::App& app);
 
 }  // namespace dsreg::cli

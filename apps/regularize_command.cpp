@@ -16,32 +16,7 @@ namespace dsreg::cli {
 
 namespace {
 
-/// What the command line holds beyond the library's option structs.
-struct CliFlags {
-    std::vector<CLI::Option*> at_only;  ///< flags that apply only to --normals at
-    std::string at_epsilon = "2:0.25";  ///< --at-eps ε1:ε2 (or a single ε)
-    std::vector<std::int64_t> raw_dims;
-    std::string raw_type = "uint8";
-    bool raw_big_endian = false;
-    std::uint64_t raw_header_bytes = 0;
-    std::vector<double> spacing;
-    std::string solver = "auto";
-    int connectivity = 26;
-    std::string space = "lps";
-    bool quiet = false, verbose = false;
-};
-
-struct RegularizeCommand {
-    VolumeSource source;
-    PipelineOptions options;
-    PipelineOutputs outputs;
-    CliFlags flags;
-};
-
 void add_volume_source_options(CLI::App& command, VolumeSource& o, CliFlags& flags) {
-    command.add_option("input", o.input_path,
-                       "Volume file: .nii .nii.gz .hdr/.img .nrrd .nhdr .mha .mhd .tif .h5 .vtk .dcm .npy .vol .longvol "
-                       ".pgm3d .raw, or a folder holding a DICOM series");
     command.add_option("--shape", o.shape,
                        "Implicit shape instead of a file: a named shape (sphere1 sphere9 ellipsoid cylinder torus "
                        "rcube goursat goursat-hole distel leopold diabolo heart crixxi) or a polynomial such as "
@@ -141,7 +116,8 @@ void add_regularization_extension_options(CLI::App& command, RegularizationExten
 }
 
 
-/// The library's structs from the flags that the command line spells differently.
+}  // namespace
+
 void apply_flags(RegularizeCommand& c) {
     CliFlags& f = c.flags;
     RawVolumeLayout layout;
@@ -163,6 +139,8 @@ void apply_flags(RegularizeCommand& c) {
         if (option->count() > 0 && !at) throw Error(option->get_name() + " only applies to --normals at");
     if (at) parse_epsilon_range(f.at_epsilon, normals.at);
 }
+
+namespace {
 
 /// On stderr, as each stage ends: "dsreg: surface    0.024 s  37590 surfels, …".
 ProgressCallback stage_lines(bool shown) {
@@ -189,40 +167,47 @@ void run(RegularizeCommand& c) {
 
 }  // namespace
 
+void add_pipeline_flags(CLI::App& command, RegularizeCommand& c) {
+    add_volume_source_options(command, c.source, c.flags);
+    command.add_option("--space", c.flags.space,
+                       "Coordinates of the output meshes: lps (world, as ITK, DICOM and 3D Slicer), ras (world, as "
+                       "nibabel, FreeSurfer, FSL), voxel (voxel indices, voxel centres at integers)")
+        ->check(CLI::IsMember({"lps", "ras", "voxel"}, CLI::ignore_case))
+        ->capture_default_str();
+    command.add_option("--connectivity", c.flags.connectivity,
+                       "Object connectivity where voxels touch by an edge: 6 keeps them apart, 26 joins them")
+        ->check(CLI::IsMember({6, 26}))
+        ->capture_default_str();
+    add_normal_field_options(command, c.options.normals, c.outputs, c.flags);
+    add_regularization_extension_options(command, c.options.extensions);
+    command.add_option("--alpha", c.options.alpha, "Weight of data attachment (> 0)")->capture_default_str();
+    command.add_option("--beta", c.options.beta, "Weight of normal alignment (>= 0)")->capture_default_str();
+    command.add_option("--gamma", c.options.gamma, "Weight of fairness (>= 0)")->capture_default_str();
+    command.add_option("--solver", c.flags.solver,
+                       "Linear solver: auto (cholmod for small systems and tiny alpha, else amg), cholmod (sparse "
+                       "Cholesky), amg (CG preconditioned by smoothed aggregation multigrid) or cg (block-Jacobi CG); "
+                       "iterative solvers stop once their error bound is below 5e-5 voxel")
+        ->check(CLI::IsMember(solver_names()))
+        ->capture_default_str();
+    command.add_flag("--triangulate", c.outputs.triangulate, "Split each quad along its shorter diagonal");
+    command.add_option("--input-mesh", c.outputs.input_mesh, "Also write the unregularized digital surface to this file");
+    command.add_option("--report", c.outputs.report, "Write counts, timings, energies and parameters as JSON");
+    command.add_option("--html", c.outputs.html,
+                       "Write a self-contained HTML page showing the result in 3D: the surface, the digital surface, "
+                       "colours by deviation from u, displacement, feature map; the run's summary (docs/viewer.md)");
+}
+
 void add_regularize_command(CLI::App& app) {
     auto c = std::make_shared<RegularizeCommand>();
     CLI::App* cmd = app.add_subcommand("regularize", "Regularize the digital surface of a volume into a smooth quad mesh");
-    add_volume_source_options(*cmd, c->source, c->flags);
+    cmd->add_option("input", c->source.input_path,
+                    "Volume file: .nii .nii.gz .hdr/.img .nrrd .nhdr .mha .mhd .tif .h5 .vtk .dcm .npy .vol .longvol "
+                    ".pgm3d .raw, or a folder holding a DICOM series");
     cmd->add_option("-o,--output", c->outputs.mesh,
                     "Output mesh: .obj .off .ply .vtk .vtp (quads) or .stl (triangles); .vtk and .vtp are 3D Slicer's "
                     "model formats")
         ->required();
-    cmd->add_option("--space", c->flags.space,
-                    "Coordinates of the output meshes: lps (world, as ITK, DICOM and 3D Slicer), ras (world, as nibabel, "
-                    "FreeSurfer, FSL), voxel (voxel indices, voxel centres at integers)")
-        ->check(CLI::IsMember({"lps", "ras", "voxel"}, CLI::ignore_case))
-        ->capture_default_str();
-    cmd->add_option("--connectivity", c->flags.connectivity,
-                    "Object connectivity where voxels touch by an edge: 6 keeps them apart, 26 joins them")
-        ->check(CLI::IsMember({6, 26}))
-        ->capture_default_str();
-    add_normal_field_options(*cmd, c->options.normals, c->outputs, c->flags);
-    add_regularization_extension_options(*cmd, c->options.extensions);
-    cmd->add_option("--alpha", c->options.alpha, "Weight of data attachment (> 0)")->capture_default_str();
-    cmd->add_option("--beta", c->options.beta, "Weight of normal alignment (>= 0)")->capture_default_str();
-    cmd->add_option("--gamma", c->options.gamma, "Weight of fairness (>= 0)")->capture_default_str();
-    cmd->add_option("--solver", c->flags.solver,
-                    "Linear solver: auto (cholmod for small systems and tiny alpha, else amg), cholmod (sparse "
-                    "Cholesky), amg (CG preconditioned by smoothed aggregation multigrid) or cg (block-Jacobi CG); "
-                    "iterative solvers stop once their error bound is below 5e-5 voxel")
-        ->check(CLI::IsMember(solver_names()))
-        ->capture_default_str();
-    cmd->add_flag("--triangulate", c->outputs.triangulate, "Split each quad along its shorter diagonal");
-    cmd->add_option("--input-mesh", c->outputs.input_mesh, "Also write the unregularized digital surface to this file");
-    cmd->add_option("--report", c->outputs.report, "Write counts, timings, energies and parameters as JSON");
-    cmd->add_option("--html", c->outputs.html,
-                    "Write a self-contained HTML page showing the result in 3D: the surface, the digital surface, "
-                    "colours by deviation from u, displacement, feature map; the run's summary (docs/viewer.md)");
+    add_pipeline_flags(*cmd, *c);
     cmd->add_flag("-q,--quiet", c->flags.quiet, "Print nothing but errors");
     cmd->add_flag("-v,--verbose", c->flags.verbose, "Print each stage as it finishes");
     cmd->callback([c] { run(*c); });

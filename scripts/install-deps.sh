@@ -8,6 +8,8 @@
 #                                    the 3D Slicer peer, and bench/accuracy.sh; benchmarks only)
 #   scripts/install-deps.sh --fuzz   also clang with its sanitizer/libFuzzer runtimes and OpenMP
 #                                    (scripts/sanitize.sh, scripts/fuzz.sh); implies --dev
+#   scripts/install-deps.sh --python also what `pip install --no-build-isolation .` needs offline
+#                                    (docs/python.md); with --dev, the Python tests' packages too
 #   scripts/install-deps.sh --viewer also Chromium, which opens the HTML pages headless (the
 #                                    viewer's browser test, scripts/render.sh), and Python's PIL,
 #                                    with which the test reads the screenshots
@@ -17,15 +19,20 @@ packages=(build-essential cmake pkg-config libeigen3-dev libsuitesparse-dev libo
           libcli11-dev nlohmann-json3-dev libcgal-dev libjs-three libinsighttoolkit5-dev libgdcm-tools)
 dev=(libgtest-dev libgmock-dev libbenchmark-dev python3 python3-numpy python3-nibabel python3-vtk9)
 bench=(python3 python3-vtk9 python3-numpy)
+python=(python3-dev python3-numpy python3-venv python3-setuptools python3-wheel pybind11-dev)
+python_dev=(python3-pytest python3-meshio)
+with_dev=false with_python=false
 for option in "$@"; do
     case $option in
-        --dev) packages+=("${dev[@]}") ;;
+        --dev) packages+=("${dev[@]}"); with_dev=true ;;
         --bench) packages+=("${bench[@]}") ;;
         --fuzz) packages+=("${dev[@]}" clang libclang-rt-14-dev libomp-dev) ;;
+        --python) packages+=("${python[@]}"); with_python=true ;;
         --viewer) packages+=(chromium python3-pil) ;;
-        *) echo "usage: $0 [--dev] [--bench] [--fuzz] [--viewer]" >&2; exit 2 ;;
+        *) echo "usage: $0 [--dev] [--bench] [--fuzz] [--python] [--viewer]" >&2; exit 2 ;;
     esac
 done
+$with_dev && $with_python && packages+=("${python_dev[@]}")
 
 missing=()
 for p in "${packages[@]}"; do

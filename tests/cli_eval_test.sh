@@ -109,6 +109,10 @@ vtable=$("$DSREG" eval "$work/g-file.obj" --volume "$work/g.vol")
 check "eval --volume table: next to the surface" grep -q "next to the surface" <<<"$vtable"
 json_g=$("$DSREG" eval "$work/g-shape.obj" --shape goursat --h 0.5 --json)
 check "eval --shape: object and boundary shares" grep -q '"boundary_share"' <<<"$json_g"
+"$DSREG" eval "$work/g-file.obj" --shape goursat --h 0.5 --voxel-coordinates --face-errors "$work/g-faces.csv" >/dev/null
+check "eval --face-errors: a line per face" test "$(($(wc -l <"$work/g-faces.csv") - 1))" -eq "$(grep -c '^f ' "$work/g-file.obj")"
+expect_error "eval --face-errors with --volume" "--face-errors" eval "$work/g-file.obj" --volume "$work/g.vol" --face-errors "$work/x.csv"
+check "eval: no CSV after an error" test ! -e "$work/x.csv"
 expect_error "eval without truth" "--volume" eval "$work/g-file.obj"
 expect_error "eval --volume with --h" "--volume" eval "$work/g-file.obj" --volume "$work/g.vol" --h 0.5
 expect_error "eval --min without --volume" "--min" eval "$work/g-file.obj" --shape goursat --min 1

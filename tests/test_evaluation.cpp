@@ -14,6 +14,7 @@
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
+#include "dsreg/evaluation_report.hpp"
 #include "dsreg/normals.hpp"
 #include "test_support.hpp"
 
@@ -461,6 +462,62 @@ TEST(EvaluateMesh, RejectsEmptyAndMalformedMeshes) {
     PolygonMesh bad = octahedron();
     bad.faces(0, 0) = 99;
     EXPECT_THROW(evaluate_mesh(bad, make_shape("sphere1"), fast_options()), Error);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The `dsreg eval` job (evaluation_report.hpp)
+
+EvaluationRequest sphere_request(double h) {
+    EvaluationRequest request;
+    request.truth.shape = "sphere1";
+    request.h = h;
+    request.volume_cells = 16;
+    return request;
+}
+
+TEST(RunEvaluation, VoxelCoordinatesMapTheMeshBackToTheShapesFrame) {
+    const double h = 0.1;
+    const PolygonMesh mesh = icosphere(3);
+    const VoxelGrid grid = digitize(make_shape("sphere1"), h).grid;
+    PolygonMesh in_voxels = mesh;  // the same mesh in the digitization's voxel frame
+    for (Eigen::Index i = 0; i < mesh.vertices.rows(); ++i)
+        in_voxels.vertices.row(i) = (mesh.vertices.row(i) - grid.voxel_center(0, 0, 0).transpose()).cwiseQuotient(grid.spacing.transpose());
+
+    EvaluationRequest request = sphere_request(h);
+    const EvaluationRun direct = run_evaluation(mesh, "m", request);
+    request.voxel_coordinates = true;
+    const EvaluationRun mapped = run_evaluation(in_voxels, "m", request);
+    EXPECT_NEAR(mapped.evaluation.vertex_distance.linf, direct.evaluation.vertex_distance.linf, 1e-12);
+    EXPECT_NEAR(mapped.evaluation.normal_angle_deg.mean, direct.evaluation.normal_angle_deg.mean, 1e-9);
+    EXPECT_EQ(mapped.evaluation.voxels.correct, direct.evaluation.voxels.correct);
+    EXPECT_LT(direct.evaluation.vertex_distance.linf, 0.01);  // the icosphere lies on the unit sphere
+}
+
+TEST(RunEvaluation, FoldedFacesAreCountedAgainstTheMeshsOwnField) {
+    PolygonMesh mesh = icosphere(2);
+    const EvaluationRequest request = sphere_request(0.2);
+    const nlohmann::json without = evaluation_report(run_evaluation(mesh, "m", request), "m");
+    EXPECT_TRUE(without["validity"]["folded_faces"].is_null());
+    EXPECT_EQ(without["validity"]["intersecting_pairs"], 0);
+
+    mesh.face_normals = face_normals(mesh.vertices, mesh.faces);
+    EXPECT_EQ(run_evaluation(mesh, "m", request).validity.folded_faces, 0);
+    mesh.face_normals = -mesh.face_normals;
+    const EvaluationRun against = run_evaluation(mesh, "m", request);
+    EXPECT_EQ(against.validity.folded_faces, mesh.faces.rows());
+    EXPECT_EQ(evaluation_report(against, "m")["validity"]["folded_faces"], mesh.faces.rows());
+}
+
+TEST(RunEvaluation, VolumeExcludesTheShapesFlagsAndShapeFlagsNeedAShape) {
+    EvaluationRequest request = sphere_request(0.1);
+    request.volume = "v.vol";
+    EXPECT_THROW(check_evaluation_request(request), Error);  // --volume with --shape and --h
+    EvaluationRequest no_truth;
+    EXPECT_THROW(check_evaluation_request(no_truth), Error);
+    EvaluationRequest range = sphere_request(0.1);
+    range.min_value = 1.0;
+    EXPECT_THROW(check_evaluation_request(range), Error);
+    EXPECT_TRUE(check_evaluation_request(sphere_request(0.1)).has_value());
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -228,5 +228,21 @@ TEST(Pipeline, TwoOutputsOnOneFileAreRejectedBeforeAnyWork) {
     EXPECT_THROW(check_pipeline_outputs(outputs), Error);
 }
 
+TEST(Pipeline, WithoutAMeshPathOnlyTheOtherOutputsAreWritten) {
+    // The Python module returns the mesh and writes only the files asked (--report here).
+    const std::filesystem::path folder = fresh_folder("no_mesh");
+    PipelineOutputs outputs;
+    EXPECT_FALSE(outputs.any());
+    outputs.report = (folder / "r.json").string();
+    ASSERT_TRUE(outputs.any());
+    check_pipeline_outputs(outputs);
+    PipelineResult result = run_pipeline(loaded_ball(), PipelineOptions{});
+    write_pipeline_outputs(result, PipelineOptions{}, outputs, VolumeSource{});
+    std::vector<std::filesystem::path> written;
+    for (const auto& entry : std::filesystem::directory_iterator(folder)) written.push_back(entry.path().filename());
+    EXPECT_EQ(written, std::vector<std::filesystem::path>{"r.json"});
+    EXPECT_EQ(result.stage_seconds.back().first, "write");
+}
+
 }  // namespace
 }  // namespace dsreg

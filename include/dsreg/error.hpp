@@ -14,4 +14,17 @@ public:
     explicit Error(const std::string& message) : std::runtime_error(message) {}
 };
 
+/// An Error of the file system rather than of the content: a file that cannot be found, opened,
+/// read, created, written or renamed. `error_number` is the errno value when known (ENOENT,
+/// EACCES, EISDIR, ...), else 0. The command-line tool prints it like any Error; the Python
+/// module raises OSError (FileNotFoundError, PermissionError, ...) for it, ValueError for the rest.
+class FileError : public Error {
+public:
+    explicit FileError(const std::string& message, int error_number = 0) : Error(message), error_number_(error_number) {}
+    int error_number() const { return error_number_; }
+
+private:
+    int error_number_;
+};
+
 }  // namespace dsreg

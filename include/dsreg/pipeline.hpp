@@ -10,7 +10,9 @@
 // Units: every length (h, box, radius, positions) is in the volume's physical units (see
 // volume.hpp); the pipeline works in the grid frame of volume.hpp (origin + spacing ⊙ index), and
 // the mesh files are written in PipelineOutputs::space (world_space.hpp): LPS by default, which
-// for the DGtal formats and shapes (identity direction) is the grid frame itself.
+// for the DGtal formats and shapes (identity direction) is the grid frame itself. A caller's array
+// is placed by a voxel-to-world affine (grid_placement.hpp) into the same VoxelGrid geometry as a
+// medical file's.
 #pragma once
 
 #include <cstdint>
@@ -31,6 +33,7 @@
 #include "dsreg/solvers.hpp"
 #include "dsreg/volume.hpp"
 #include "dsreg/volume_io.hpp"
+#include "dsreg/voxel_array.hpp"
 #include "dsreg/world_space.hpp"
 
 namespace dsreg {
@@ -38,16 +41,22 @@ namespace dsreg {
 // ---------------------------------------------------------------------------------------------
 // Stage 1: where the binary volume comes from.
 
-/// A volume file or an implicit shape, and which voxels form the object.
+/// A volume file, an implicit shape or a caller's array, and which voxels form the object.
 struct VolumeSource {
     std::string input_path;   ///< a volume file (any format read_volume accepts), or
-    std::string shape;        ///< a named shape or a polynomial in x, y, z (F ≤ 0 inside)
+    std::string shape;        ///< a named shape or a polynomial in x, y, z (F ≤ 0 inside), or
+    std::optional<VoxelArray> array;  ///< values in the caller's memory (the Python module's numpy arrays)
+    /// Of an array: the voxel-to-world affine into `affine_space` (grid_placement.hpp); or
+    /// `spacing` and `origin`.
+    std::optional<Eigen::Matrix4d> affine;
+    OutputSpace affine_space = OutputSpace::Lps;  ///< lps or ras (nibabel's img.affine)
+    std::optional<Eigen::Vector3d> origin;       ///< of an array: centre of voxel (0,0,0); default 0
     std::optional<double> h;  ///< grid step of --shape; unset = default_grid_step
     double box = 10;          ///< half-size of the domain of a polynomial shape
     std::optional<double> min_value, max_value;  ///< object = MIN ≤ value ≤ MAX (default value > 0)
     std::optional<double> label;                 ///< --label N: object = voxels equal to N (not with min/max)
     std::optional<RawVolumeLayout> raw_layout;   ///< layout of a .raw file (--raw-dims, --raw-type, …)
-    std::optional<Eigen::Vector3d> spacing;      ///< overrides the file's voxel size
+    std::optional<Eigen::Vector3d> spacing;      ///< overrides the file's voxel size; an array's (default 1)
     std::int64_t max_voxels = std::int64_t(1) << 34;
     std::string max_memory;  ///< --max-memory as given ("4G"); empty = no limit
 };
@@ -57,19 +66,24 @@ struct LoadedVolume {
     BinaryVolume volume;
     std::string description;             ///< e.g. "bunny.vol" or "goursat at h=0.25"
     std::optional<ImplicitShape> shape;  ///< set for --shape inputs
-    double h = 1;                        ///< grid step (largest spacing for files)
-    VolumeFileInfo file;                 ///< format, value type and notes of a file input
+    double h = 1;                        ///< grid step (largest spacing for files and arrays)
+    VolumeFileInfo file;                 ///< format, value type and notes of a file input (format "array" for arrays)
     std::vector<std::string> warnings;   ///< e.g. an object taking most of the volume
 };
 
-/// Reads or digitizes the volume. Honours max_voxels and max_memory before reading any payload.
-/// Throws dsreg::Error on any problem, including an empty object (naming the file's value range).
-/// When the object of a file takes more than kMostOfTheVolume of its voxels (lobster.vol above 0:
-/// the scanner's cylinder), adds a warning giving the value histogram's main modes.
+/// Reads, digitizes or thresholds the volume. Honours max_voxels and max_memory before reading
+/// any payload. Throws dsreg::Error on any problem, including an empty object (naming the
+/// values the input has); dsreg::FileError when a file cannot be opened. When the object of a
+/// file or array takes more than kMostOfTheVolume of its voxels (lobster.vol above 0: the
+/// scanner's cylinder), adds a warning (for a file, with the value histogram's main modes).
 LoadedVolume load_volume(const VolumeSource& source);
 
-/// The fraction of a file's voxels above which its object is probably not the intended one.
+/// The fraction of the voxels above which the object is probably not the intended one.
 constexpr double kMostOfTheVolume = 0.5;
+
+/// The values of the volume file of `source` (not thresholded; volume_io.hpp's
+/// read_volume_values) with the same limits, raw layout and --spacing as load_volume.
+ScalarVolume load_volume_values(const VolumeSource& source, VolumeFileInfo* info = nullptr);
 
 /// Parses a memory size: a number of bytes with an optional suffix K, M, G or T (powers of 1024,
 /// optionally followed by "iB" or "B", any case), e.g. "4G", "512MiB", "1.5g", "1000000".
@@ -217,12 +231,12 @@ PipelineResult run_pipeline(const VolumeSource& source, const PipelineOptions& o
 
 /// The output mesh: the regularized vertices (or the digital ones with `digital`), the quads (or
 /// triangles, split along the shorter diagonal), the field u per face and, after AT, the feature
-/// map v per vertex ("v").
+/// map v per vertex ("v"); in the grid frame (output_mesh maps it to the output space).
 PolygonMesh result_mesh(const PipelineResult& result, bool triangulate, bool digital = false);
 
 /// Where the results go; empty paths are not written.
 struct PipelineOutputs {
-    std::string mesh;          ///< -o: .obj .off .ply .stl .vtk .vtp
+    std::string mesh;          ///< -o: .obj .off .ply .stl .vtk .vtp (empty in the Python module, which returns the mesh)
     std::string input_mesh;    ///< --input-mesh: the digital surface
     std::string normals;       ///< --export-normals: the field u in the --normals-file format
     std::string features;      ///< --features: AT feature lines as OBJ polylines
@@ -230,9 +244,16 @@ struct PipelineOutputs {
     std::string html;          ///< --html: a self-contained page showing the result (result_page)
     bool triangulate = false;  ///< --triangulate
     /// --space: the coordinates of the meshes and feature lines (world_space.hpp). The files record
-    /// it as 3D Slicer does ("SPACE=LPS") when the input has a world geometry (medical formats).
-    /// The --export-normals file stays in the grid frame (it is read back by --normals-file).
+    /// it as 3D Slicer does ("SPACE=LPS") when the input has a world geometry (medical formats,
+    /// arrays given with an affine). The --export-normals file stays in the grid frame (it is read
+    /// back by --normals-file).
     OutputSpace space = OutputSpace::Lps;
+
+    /// Whether any file is to be written.
+    bool any() const {
+        return !mesh.empty() || !input_mesh.empty() || !normals.empty() || !features.empty() || !report.empty() ||
+               !html.empty();
+    }
 };
 
 /// The output mesh of result_mesh() in `space`, tagged with its coordinate system when the input

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -26,15 +27,16 @@ void write_file_atomically(const std::string& path, const std::function<void(std
     const std::string tmp = temporary_sibling(path);
     try {
         {
+            errno = 0;
             std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-            if (!out) throw Error(path + ": cannot create file for writing");
+            if (!out) throw FileError(path + ": cannot create file for writing", errno);
             write(out);
             out.flush();
-            if (!out) throw Error(path + ": write failed (disk full?)");
+            if (!out) throw FileError(path + ": write failed (disk full?)", errno);
         }
         std::error_code ec;
         std::filesystem::rename(tmp, path, ec);
-        if (ec) throw Error(path + ": cannot rename temporary file into place: " + ec.message());
+        if (ec) throw FileError(path + ": cannot rename temporary file into place: " + ec.message(), ec.value());
     } catch (...) {
         std::error_code ignored;
         std::filesystem::remove(tmp, ignored);

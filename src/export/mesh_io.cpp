@@ -3,6 +3,7 @@
 #include "dsreg/mesh_io.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <filesystem>
 #include <fstream>
 
@@ -32,17 +33,18 @@ MeshFormat format_of(const std::string& path) {
 std::string read_file_content(const std::string& path) {
     std::error_code error;
     const auto status = std::filesystem::status(path, error);
-    if (!std::filesystem::exists(status)) throw Error(path + ": no such file");
-    if (std::filesystem::is_directory(status)) throw Error(path + ": is a directory, not a mesh file");
+    if (!std::filesystem::exists(status)) throw FileError(path + ": no such file", ENOENT);
+    if (std::filesystem::is_directory(status)) throw FileError(path + ": is a directory, not a mesh file", EISDIR);
+    errno = 0;
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error(path + ": cannot open file for reading");
+    if (!in) throw FileError(path + ": cannot open file for reading", errno);
     in.seekg(0, std::ios::end);
     const std::streamoff size = in.tellg();
     in.seekg(0, std::ios::beg);
-    if (size < 0 || !in) throw Error(path + ": cannot determine the size of the file");
+    if (size < 0 || !in) throw FileError(path + ": cannot determine the size of the file", EIO);
     std::string content(static_cast<std::size_t>(size), '\0');
     in.read(content.data(), size);
-    if (in.gcount() != size) throw Error(path + ": read failed");
+    if (in.gcount() != size) throw FileError(path + ": read failed", EIO);
     return content;
 }
 

@@ -2,6 +2,7 @@
 #include "dsreg/normals_file.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -213,8 +214,9 @@ PointMatrix read_normals(std::istream& in, const std::string& name, const Digita
 }
 
 PointMatrix read_normals_file(const std::string& path, const DigitalSurface& surface) {
+    errno = 0;
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error(path + ": cannot open the normals file");
+    if (!in) throw FileError(path + ": cannot open the normals file", errno);
     return read_normals(in, path, surface);
 }
 

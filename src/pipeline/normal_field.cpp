@@ -1,3 +1,4 @@
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -164,7 +165,9 @@ void check_normal_field_options(const NormalFieldOptions& o, bool input_is_shape
         if (!(o.feature_threshold > 0 && o.feature_threshold <= 1))
             throw Error("--feature-threshold must be in (0, 1]");
     }
-    if (!o.file.empty() && !std::ifstream(o.file)) throw Error("--normals-file " + o.file + ": cannot open the file");
+    errno = 0;
+    if (!o.file.empty() && !std::ifstream(o.file))
+        throw FileError("--normals-file " + o.file + ": cannot open the file", errno);
 }
 
 NormalField compute_normal_field(const NormalFieldOptions& o, const LoadedVolume& loaded, const DigitalSurface& surface,

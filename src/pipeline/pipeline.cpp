@@ -8,6 +8,7 @@
 #include "dsreg/atomic_file.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
+#include "dsreg/grid_placement.hpp"
 #include "dsreg/local_reach.hpp"
 #include "dsreg/mesh_io.hpp"
 #include "dsreg/normals_file.hpp"
@@ -96,15 +97,15 @@ nlohmann::json optional_json(const std::optional<double>& value) {
 
 nlohmann::json vector_json(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
-nlohmann::json matrix_json(const Eigen::Matrix3d& m) {  // rows
-    return {vector_json(m.row(0).transpose()), vector_json(m.row(1).transpose()), vector_json(m.row(2).transpose())};
-}
-
-/// A 4×4 homogeneous matrix (rows) of `map`.
-nlohmann::json affine_json(const AffineMap& map) {
+/// The rows of a 3×3 or 4×4 matrix.
+template <int N>
+nlohmann::json matrix_json(const Eigen::Matrix<double, N, N>& m) {
     nlohmann::json rows = nlohmann::json::array();
-    for (int r = 0; r < 3; ++r) rows.push_back({map.linear(r, 0), map.linear(r, 1), map.linear(r, 2), map.offset[r]});
-    rows.push_back({0, 0, 0, 1});
+    for (int r = 0; r < N; ++r) {
+        nlohmann::json row = nlohmann::json::array();
+        for (int c = 0; c < N; ++c) row.push_back(m(r, c));
+        rows.push_back(row);
+    }
     return rows;
 }
 
@@ -112,13 +113,10 @@ nlohmann::json affine_json(const AffineMap& map) {
 /// and from voxel indices (index → grid frame: origin + spacing ⊙ index).
 nlohmann::json space_json(const VoxelGrid& grid, const PipelineOutputs& outputs, bool world_geometry) {
     const AffineMap to_space = grid_to_space(grid, outputs.space);
-    AffineMap from_index;
-    from_index.linear = to_space.linear * grid.spacing.asDiagonal();
-    from_index.offset = to_space.apply(grid.origin);
     return {{"name", output_space_name(outputs.space)},
             {"recorded_in_files", world_geometry ? slicer_coordinate_system(outputs.space) : ""},
-            {"grid_to_output", affine_json(to_space)},
-            {"index_to_output", affine_json(from_index)},
+            {"grid_to_output", matrix_json(homogeneous_matrix(to_space))},
+            {"index_to_output", matrix_json(grid_affine(grid, outputs.space))},
             {"faces_reversed", to_space.reverses_orientation()}};
 }
 
@@ -175,7 +173,7 @@ PolygonMesh output_mesh(const PipelineResult& result, const PipelineOutputs& out
 }
 
 void check_pipeline_outputs(const PipelineOutputs& o) {
-    check_mesh_output_path("-o", o.mesh);
+    if (!o.mesh.empty()) check_mesh_output_path("-o", o.mesh);
     if (!o.input_mesh.empty()) check_mesh_output_path("--input-mesh", o.input_mesh);
     if (!o.report.empty()) check_output_folder("--report", o.report);
     if (!o.html.empty()) check_page_output_path("--html", o.html);
@@ -197,12 +195,13 @@ void write_pipeline_outputs(PipelineResult& result, const PipelineOptions& optio
                             const VolumeSource& source, const ProgressCallback& progress) {
     StageClock clock(progress);
     clock.start("write");
-    write_mesh(outputs.mesh, output_mesh(result, outputs));
+    if (!outputs.mesh.empty()) write_mesh(outputs.mesh, output_mesh(result, outputs));
     if (!outputs.input_mesh.empty()) write_mesh(outputs.input_mesh, output_mesh(result, outputs, true));
     if (!outputs.normals.empty())
         write_normals_file(outputs.normals, result.surface, result.field.normals, result.field.description);
-    write_feature_lines(outputs.features, options.normals, result.field, result.surface,
-                        map_points(grid_to_space(result.grid, outputs.space), result.regularization.positions));
+    if (!outputs.features.empty())
+        write_feature_lines(outputs.features, options.normals, result.field, result.surface,
+                            map_points(grid_to_space(result.grid, outputs.space), result.regularization.positions));
     if (!outputs.html.empty()) write_html_view(outputs.html, result_page(result, options));
     clock.finish(outputs.mesh);
     result.stage_seconds.push_back(clock.stage_seconds().back());

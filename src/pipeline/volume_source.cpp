@@ -7,9 +7,10 @@
 #include <sstream>
 
 #include "dsreg/error.hpp"
+#include "dsreg/grid_placement.hpp"
 #include "dsreg/value_histogram.hpp"
-#include "dsreg/volume_io.hpp"
 #include "dsreg/text.hpp"
+#include "dsreg/volume_io.hpp"
 
 namespace dsreg {
 
@@ -131,27 +132,74 @@ ValueRange object_range(const VolumeSource& o) {
     return range;
 }
 
-LoadedVolume read_file(const VolumeSource& o) {
-    const ValueRange range = object_range(o);
+void check_spacing(const Eigen::Vector3d& spacing) {
+    if (!(spacing.array() > 0).all() || !spacing.allFinite())
+        throw Error("--spacing: every voxel size must be positive and finite");
+}
+
+/// Runs a reader with the voxel limit of the options, naming --max-memory when it is the bound.
+template <typename Read>
+auto read_within_limits(const VolumeSource& o, Read&& read) {
     VolumeLimits limits;
     limits.max_voxels = memory_voxel_cap(o);
     const bool memory_bound = limits.max_voxels < o.max_voxels;
-    LoadedVolume loaded;
     try {
-        loaded.volume = read_volume(o.input_path, range, o.raw_layout ? &*o.raw_layout : nullptr, limits, &loaded.file);
+        return read(limits);
     } catch (const Error& error) {
         const std::string message = error.what();
         if (memory_bound && message.find("exceed the limit of") != std::string::npos)
             throw Error(message + " that --max-memory " + o.max_memory + " leaves room for");
         throw;
     }
+}
+
+LoadedVolume read_file(const VolumeSource& o) {
+    LoadedVolume loaded;
+    loaded.volume = read_within_limits(o, [&](const VolumeLimits& limits) {
+        return read_volume(o.input_path, object_range(o), o.raw_layout ? &*o.raw_layout : nullptr, limits, &loaded.file);
+    });
     loaded.description = o.input_path;
     if (o.spacing) {
-        if (!(o.spacing->array() > 0).all() || !o.spacing->allFinite())
-            throw Error("--spacing: every voxel size must be positive and finite");
+        check_spacing(*o.spacing);
         loaded.volume.grid.spacing = *o.spacing;
     }
     loaded.h = loaded.volume.grid.spacing.maxCoeff();
+    return loaded;
+}
+
+/// The grid of an array: placed by its affine, or by its spacing and origin.
+VoxelGrid array_grid(const VolumeSource& o) {
+    if (o.affine) {
+        if (o.spacing || o.origin) throw Error("affine gives the spacing and the origin: do not give them too");
+        return grid_from_affine(o.array->dims, *o.affine, o.affine_space);
+    }
+    VoxelGrid grid;
+    grid.dims = o.array->dims;
+    if (o.spacing) check_spacing(*o.spacing), grid.spacing = *o.spacing;
+    if (o.origin) {
+        if (!o.origin->allFinite()) throw Error("origin: every coordinate must be finite");
+        grid.origin = *o.origin;
+    }
+    return grid;
+}
+
+LoadedVolume threshold_array(const VolumeSource& o) {
+    const VoxelArray& array = *o.array;
+    check_voxel_array(array);
+    const double voxels = double(array.dims[0]) * double(array.dims[1]) * double(array.dims[2]);
+    const std::int64_t cap = memory_voxel_cap(o);
+    if (voxels > double(cap))
+        throw Error(array.description + ": " + format_number(voxels) + " voxels exceed the limit of " +
+                    std::to_string(cap) + (cap < o.max_voxels ? " that --max-memory " + o.max_memory + " leaves room for"
+                                                              : " (--max-voxels)"));
+    LoadedVolume loaded;
+    loaded.volume.grid = array_grid(o);
+    loaded.volume.mask = threshold_voxel_array(array, object_range(o));
+    loaded.description = array.description;
+    loaded.h = loaded.volume.grid.spacing.maxCoeff();
+    loaded.file.format = "array";
+    loaded.file.value_type = value_type_name(array);
+    loaded.file.world_geometry = o.affine.has_value();
     return loaded;
 }
 
@@ -165,30 +213,48 @@ std::string object_value_range(const VolumeSource& o) {
     return low + "value" + high;
 }
 
-/// "its values range from A to B" for the input file (read again, 4 bytes per voxel), or "" when
-/// that cannot be read within the limits. For messages about an empty object.
-std::string file_value_range(const VolumeSource& o) {
+/// "its values range from A to B" for the input file (read again, 4 bytes per voxel) or array, or
+/// "" when that cannot be read within the limits. For messages about an empty object.
+std::string input_value_range(const VolumeSource& o) {
+    std::optional<std::pair<double, double>> range;
     try {
-        VolumeLimits limits;
-        limits.max_voxels = memory_voxel_cap(o);
-        const ScalarVolume values = read_volume_values(o.input_path, o.raw_layout ? &*o.raw_layout : nullptr, limits);
-        if (values.values.empty()) return "";
-        const auto [low, high] = std::minmax_element(values.values.begin(), values.values.end());
-        return "its values range from " + format_number(*low) + " to " + format_number(*high);
+        if (o.array) {
+            range = voxel_array_value_range(*o.array);
+        } else {
+            const ScalarVolume values = load_volume_values(o);
+            if (!values.values.empty()) {
+                const auto [low, high] = std::minmax_element(values.values.begin(), values.values.end());
+                range = std::make_pair(double(*low), double(*high));
+            }
+        }
     } catch (const std::exception&) {
         return "";  // only a hint: a file too large for the limits, say
     }
+    if (!range) return "";
+    return "its values range from " + format_number(range->first) + " to " + format_number(range->second);
 }
 
-/// The object takes most of the volume: say so, with the value histogram's main modes (the file
-/// is read twice more, streaming, nothing kept per voxel).
+/// Exactly one input; no placement where it does not apply.
+void check_input_choice(const VolumeSource& o) {
+    const int inputs = int(!o.input_path.empty()) + int(!o.shape.empty()) + int(o.array.has_value());
+    if (inputs == 0) throw Error("no input: give a volume file or --shape NAME");
+    if (inputs > 1)
+        throw Error(o.array ? "give either an array, a volume file or --shape, not several"
+                            : "give either a volume file or --shape, not both");
+    if (!o.array && (o.affine || o.origin)) throw Error("affine and origin apply to arrays only");
+}
+
+/// The object takes most of the volume: say so, with the value histogram's main modes for a file
+/// (read twice more, streaming, nothing kept per voxel).
 std::string most_of_the_volume_warning(const VolumeSource& o, double fraction) {
     std::string modes;
     try {
-        VolumeLimits limits;
-        limits.max_voxels = memory_voxel_cap(o);
-        const ValueHistogram histogram = read_value_histogram(o.input_path, o.raw_layout ? &*o.raw_layout : nullptr, limits);
-        modes = describe_modes(histogram_modes(histogram), histogram.integral);
+        if (!o.array) {
+            VolumeLimits limits;
+            limits.max_voxels = memory_voxel_cap(o);
+            const ValueHistogram histogram = read_value_histogram(o.input_path, o.raw_layout ? &*o.raw_layout : nullptr, limits);
+            modes = describe_modes(histogram_modes(histogram), histogram.integral);
+        }
     } catch (const std::exception&) {
         // only a hint
     }
@@ -200,20 +266,32 @@ std::string most_of_the_volume_warning(const VolumeSource& o, double fraction) {
 }  // namespace
 
 LoadedVolume load_volume(const VolumeSource& o) {
-    if (o.input_path.empty() == o.shape.empty())
-        throw Error(o.shape.empty() ? "no input: give a volume file or --shape NAME" : "give either a volume file or --shape, not both");
+    check_input_choice(o);
     if (o.max_voxels <= 0) throw Error("--max-voxels must be positive (got " + std::to_string(o.max_voxels) + ")");
     if (!o.shape.empty()) return digitize_shape(o);
-    LoadedVolume loaded = read_file(o);
+    LoadedVolume loaded = o.array ? threshold_array(o) : read_file(o);
     const std::int64_t object = loaded.volume.object_voxel_count();
     if (object == 0) {
-        const std::string values = file_value_range(o);
-        throw Error(o.input_path + ": the object is empty: no voxel has " + object_value_range(o) +
+        const std::string values = input_value_range(o);
+        throw Error(loaded.description + ": the object is empty: no voxel has " + object_value_range(o) +
                     (values.empty() ? "" : "; " + values) + " (choose the object's values with --label, --min and --max)");
     }
     const double fraction = double(object) / double(loaded.volume.grid.voxel_count());
     if (fraction > kMostOfTheVolume) loaded.warnings.push_back(most_of_the_volume_warning(o, fraction));
     return loaded;
+}
+
+ScalarVolume load_volume_values(const VolumeSource& o, VolumeFileInfo* info) {
+    if (o.input_path.empty()) throw Error("no input: give a volume file");
+    if (o.max_voxels <= 0) throw Error("--max-voxels must be positive (got " + std::to_string(o.max_voxels) + ")");
+    ScalarVolume values = read_within_limits(o, [&](const VolumeLimits& limits) {
+        return read_volume_values(o.input_path, o.raw_layout ? &*o.raw_layout : nullptr, limits, info);
+    });
+    if (o.spacing) {
+        check_spacing(*o.spacing);
+        values.grid.spacing = *o.spacing;
+    }
+    return values;
 }
 
 }  // namespace dsreg

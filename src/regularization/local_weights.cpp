@@ -92,8 +92,9 @@ Eigen::VectorXd face_means(const FaceMatrix& faces, const Eigen::VectorXd& verte
 }
 
 Eigen::VectorXd read_values_file(const std::string& path, std::int64_t expected_count, const std::string& what) {
+    errno = 0;
     std::ifstream in(path);
-    if (!in) throw Error(path + ": cannot open the " + what + " values file");
+    if (!in) throw FileError(path + ": cannot open the " + what + " values file", errno);
     Eigen::VectorXd values(expected_count);
     std::int64_t count = 0;
     std::string line;

@@ -77,25 +77,6 @@ void check_sizes_within_limits(const std::string& path, const std::vector<std::i
     }
 }
 
-double orthonormality_error(const Eigen::Matrix3d& direction) {
-    return (direction.transpose() * direction - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
-}
-
-Eigen::Matrix3d nearest_orthonormal(const Eigen::Matrix3d& direction) {
-    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(direction, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    return svd.matrixU() * svd.matrixV().transpose();
-}
-
-double max_shear_degrees(const Eigen::Matrix3d& direction) {
-    double worst = 0;
-    for (int a = 0; a < 3; ++a)
-        for (int b = a + 1; b < 3; ++b) {
-            const double cosine = direction.col(a).normalized().dot(direction.col(b).normalized());
-            worst = std::max(worst, std::abs(90.0 - std::acos(std::max(-1.0, std::min(1.0, cosine))) * 180.0 / M_PI));
-        }
-    return worst;
-}
-
 VoxelGrid image_geometry(const std::string& path, const ImageHeader& header, VolumeFileInfo& info) {
     VoxelGrid grid;
     const std::size_t n = std::min<std::size_t>(3, header.sizes.size());
@@ -120,11 +101,9 @@ VoxelGrid image_geometry(const std::string& path, const ImageHeader& header, Vol
     if (n < 3) grid.direction.col(2) = grid.direction.col(0).cross(grid.direction.col(1)).normalized();
     if (n < 2) grid.direction.col(1) = grid.direction.col(2).cross(grid.direction.col(0)).normalized();
 
+    const std::string problem = direction_problem(grid.direction);
+    if (!problem.empty()) fail(path, problem);
     const double error = orthonormality_error(grid.direction);
-    if (error > kOrthonormalTolerance)
-        fail(path, "the direction cosines are not orthonormal (axes up to " + format_number(max_shear_degrees(grid.direction)) +
-                       " degrees from perpendicular, or not of unit length): a sheared or skewed voxel grid, e.g. a CT "
-                       "with gantry tilt; resample it onto a rectangular grid first");
     if (error > 1e-12) {
         grid.direction = nearest_orthonormal(grid.direction);
         if (error > 1e-6)

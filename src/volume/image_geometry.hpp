@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "dsreg/grid_placement.hpp"
 #include "dsreg/volume.hpp"
 #include "dsreg/volume_io.hpp"
 #include "itk_bridge.hpp"
@@ -28,7 +29,7 @@ Index3 image_dims(const std::string& path, const ImageHeader& header);
 
 /// Spacing, origin and direction of the first three dimensions of `header` (dims unset): a
 /// negative spacing is made positive by negating its direction column; a direction matrix within
-/// kOrthonormalTolerance of orthonormal is replaced by the nearest orthonormal matrix (noted in
+/// kOrthonormalTolerance of orthonormal (grid_placement.hpp) is replaced by the nearest orthonormal matrix (noted in
 /// `info`), others are rejected; zero or non-finite values are rejected.
 VoxelGrid image_geometry(const std::string& path, const ImageHeader& header, VolumeFileInfo& info);
 
@@ -36,20 +37,6 @@ VoxelGrid image_geometry(const std::string& path, const ImageHeader& header, Vol
 /// limits.max_voxels: run on a header's own sizes before anything else reads the file.
 void check_sizes_within_limits(const std::string& path, const std::vector<std::int64_t>& sizes, std::int64_t components,
                                const VolumeLimits& limits);
-
-/// Largest |DᵀD − I| accepted (and then orthonormalized). ITK itself takes 1e-4 as orthonormal;
-/// float32 storage (NIfTI) rounds at ~1e-7.
-constexpr double kOrthonormalTolerance = 1e-3;
-
-/// max |DᵀD − I| over the entries: 0 for an orthonormal matrix.
-double orthonormality_error(const Eigen::Matrix3d& direction);
-
-/// The orthonormal matrix nearest to `direction` (polar decomposition U·Vᵀ of its SVD U·Σ·Vᵀ);
-/// keeps the sign of the determinant.
-Eigen::Matrix3d nearest_orthonormal(const Eigen::Matrix3d& direction);
-
-/// Largest angle (degrees) by which two columns of `direction` depart from perpendicular.
-double max_shear_degrees(const Eigen::Matrix3d& direction);
 
 /// The total bytes of the files that hold an image (for the plausibility bound of decoders that
 /// ITK runs: at most max_inflated_size(total) bytes of voxels). Missing files count 0.

@@ -188,17 +188,20 @@ ScalarVolume VoxelDestination::take_values() {
 
 InputFile::InputFile(const std::string& path) : path_(path) {
     namespace fs = std::filesystem;
+    const auto refuse = [&](const std::string& problem, int error_number) {
+        throw FileError(path + ": " + problem, error_number);
+    };
     std::error_code error;
     const fs::file_status status = fs::status(path, error);
-    if (status.type() == fs::file_type::not_found) fail("cannot open: no such file");
-    if (error) fail("cannot open: " + error.message());
-    if (status.type() == fs::file_type::directory) fail("cannot open: is a directory, not a volume file");
-    if (status.type() != fs::file_type::regular) fail("cannot open: not a regular file");
+    if (status.type() == fs::file_type::not_found) refuse("cannot open: no such file", ENOENT);
+    if (error) refuse("cannot open: " + error.message(), error.value());
+    if (status.type() == fs::file_type::directory) refuse("cannot open: is a directory, not a volume file", EISDIR);
+    if (status.type() != fs::file_type::regular) refuse("cannot open: not a regular file", 0);
     size_ = fs::file_size(path, error);
-    if (error) fail("cannot determine the file size: " + error.message());
+    if (error) refuse("cannot determine the file size: " + error.message(), error.value());
     errno = 0;
     if (buffer_.open(path, std::ios::in | std::ios::binary) == nullptr)
-        fail(std::string("cannot open for reading: ") + (errno != 0 ? std::strerror(errno) : "unknown error"));
+        refuse(std::string("cannot open for reading: ") + (errno != 0 ? std::strerror(errno) : "unknown error"), errno);
 }
 
 int InputFile::get() {
