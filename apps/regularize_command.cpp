@@ -133,6 +133,7 @@ void apply_flags(RegularizeCommand& c) {
     c.options.solver = parse_solver_kind(f.solver);
     c.outputs.space = parse_output_space(f.space);
     c.options.connectivity = f.connectivity == 6 ? Connectivity::Six : Connectivity::TwentySix;
+    c.options.validity = f.no_check ? ValidityMode::Off : f.no_repair ? ValidityMode::Check : ValidityMode::Repair;
     NormalFieldOptions& normals = c.options.normals;
     const bool at = normals.kind == "at";
     for (const CLI::Option* option : f.at_only)
@@ -189,6 +190,10 @@ void add_pipeline_flags(CLI::App& command, RegularizeCommand& c) {
                        "iterative solvers stop once their error bound is below 5e-5 voxel")
         ->check(CLI::IsMember(solver_names()))
         ->capture_default_str();
+    command.add_flag("--no-repair", c.flags.no_repair,
+                     "Keep the mesh as solved: self-intersections and faces folded against u are counted and reported "
+                     "but not repaired (docs/validity.md)");
+    command.add_flag("--no-check", c.flags.no_check, "Do not even count them (implies --no-repair)");
     command.add_flag("--triangulate", c.outputs.triangulate, "Split each quad along its shorter diagonal");
     command.add_option("--input-mesh", c.outputs.input_mesh, "Also write the unregularized digital surface to this file");
     command.add_option("--report", c.outputs.report, "Write counts, timings, energies and parameters as JSON");

@@ -23,6 +23,7 @@ struct CliFlags {
     int connectivity = 26;
     std::string space = "lps";
     bool quiet = false, verbose = false;
+    bool no_repair = false, no_check = false;
 };
 
 struct RegularizeCommand {

@@ -170,6 +170,19 @@ expect_error "max-memory below the minimum" "is below" regularize "$work/one.vol
 "$DSREG" regularize "$work/one.vol" --max-memory 1G -o "$work/mem.obj" -q
 check "max-memory large enough" test -s "$work/mem.obj"
 
+# Validity (docs/validity.md): the default run repairs what the solve folds (leopold's thin arms
+# at h = 0.5), --no-repair only counts, --no-check does neither; a clean mesh is a "valid solid".
+summary=$("$DSREG" regularize --shape leopold --h 0.5 -o "$work/leo.obj" --report "$work/leo.json" 2>&1)
+check "default run repairs" grep -q "repaired [0-9]* intersecting triangle pairs, [0-9]* folded faces in [0-9]* rounds" <<<"$summary"
+check "report: invalid as solved, valid as written" python3 -c "import json,sys; v=json.load(open(sys.argv[1]))['validity']; sys.exit(0 if v['repair'] and not v['before']['valid'] and v['after']['valid'] and v['rounds'] > 0 and v['after']['intersecting_pairs'] == 0 else 1)" "$work/leo.json"
+summary=$("$DSREG" regularize --shape leopold --h 0.5 -o "$work/leo2.obj" --no-repair --report "$work/leo2.json" 2>&1)
+check "--no-repair counts" grep -q "[1-9][0-9]* intersecting triangle pairs, [0-9]* folded faces (not repaired)" <<<"$summary"
+check "--no-repair report" python3 -c "import json,sys; v=json.load(open(sys.argv[1]))['validity']; sys.exit(0 if not v['repair'] and v['rounds'] == 0 and not v['after']['valid'] else 1)" "$work/leo2.json"
+"$DSREG" regularize --shape leopold --h 0.5 -o "$work/leo3.obj" --no-check --report "$work/leo3.json" -q
+check "--no-check: no validity in the report" grep -q '"validity": null' "$work/leo3.json"
+check "--no-repair leaves the solved mesh" cmp -s "$work/leo2.obj" "$work/leo3.obj"
+check "a clean mesh is a valid solid" grep -q "; valid solid;" <<<"$("$DSREG" regularize --shape sphere9 --h 0.5 -o "$work/s9.obj" 2>&1)"
+
 # Medical images (more in tests/medical_interop_test.py): --space and --label are checked, and a
 # shape's mesh in the default LPS is the grid frame itself (identity direction), untagged.
 expect_error "unknown space" "--space" regularize --shape sphere1 --h 0.5 --space ijk -o "$work/out.obj"

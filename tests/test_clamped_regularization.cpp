@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "dsreg/box_qp.hpp"
@@ -145,11 +146,30 @@ TEST(BoxQp, ReturnsAnInteriorUnconstrainedMinimizerUntouched) {
     EXPECT_LT((qp.R * x - qp.b).norm(), 1e-10 * qp.b.norm());
 }
 
+TEST(BoxQp, InfiniteBoundsLeaveCoordinatesFree) {
+    const double infinity = std::numeric_limits<double>::infinity();
+    for (unsigned seed = 200; seed < 210; ++seed) {
+        SmallQp open = random_qp(6, seed), far = open;
+        for (int i : {0, 3}) open.lower[i] = -infinity, far.lower[i] = -1e8;  // free below
+        for (int i : {1, 3, 4}) open.upper[i] = infinity, far.upper[i] = 1e8;  // free above
+        BoxQpReport report;
+        const Eigen::VectorXd x = solve_small(open, {}, report);
+        SCOPED_TRACE("seed " + std::to_string(seed));
+        EXPECT_TRUE(report.converged);
+        EXPECT_LT((x - exhaustive_box_qp(far)).lpNorm<Eigen::Infinity>(), 1e-9);
+    }
+}
+
 TEST(BoxQp, RejectsInconsistentProblems) {
     SmallQp qp = random_qp(4, 3);
     qp.lower[2] = 2.0;  // above upper[2] = 1
     BoxQpReport report;
     EXPECT_THROW(solve_small(qp, {}, report), Error);
+    for (const double bad : {std::nan(""), std::numeric_limits<double>::infinity()}) {
+        SmallQp empty = random_qp(4, 3);
+        empty.lower[1] = bad;  // NaN, or a lower bound of +inf: no point
+        EXPECT_THROW(solve_small(empty, {}, report), Error);
+    }
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -54,6 +54,17 @@ void expect_closed_manifold(const DigitalSurface& s) {
         }
 }
 
+/// No two faces run along the same two vertices in the same direction (which would pinch every
+/// mesh of the surface along a segment, see digital_surface.hpp).
+void expect_no_pinched_edge(const DigitalSurface& s) {
+    std::map<std::pair<std::int32_t, std::int32_t>, int> uses;
+    for (std::int64_t f = 0; f < s.face_count(); ++f)
+        for (int e = 0; e < 4; ++e) {
+            const int count = ++uses[{s.quads(f, e), s.quads(f, (e + 1) % 4)}];
+            ASSERT_EQ(count, 1) << "vertices " << s.quads(f, e) << " -> " << s.quads(f, (e + 1) % 4) << " on two faces";
+        }
+}
+
 /// The right-hand normal of each quad equals the outward axis normal of its surfel.
 void expect_outward_orientation(const DigitalSurface& s) {
     for (std::int64_t f = 0; f < s.face_count(); ++f) {
@@ -114,12 +125,37 @@ TEST(DigitalSurface, VoxelsTouchingByAnEdge) {
     EXPECT_EQ(six.split_pointel_count, 2);
     EXPECT_EQ(component_euler_characteristics(six), (std::vector<std::int64_t>{2, 2}));
 
+    // Joining them along the edge alone would pinch the surface there (both edges of the linel
+    // between the same two vertices), so 26-connectivity keeps them apart too.
     const auto joined = extract_digital_surface(volume, Connectivity::TwentySix);
     expect_closed_manifold(joined);
-    EXPECT_EQ(joined.component_count, 1);  // joined along the edge: one sphere
-    EXPECT_EQ(joined.vertex_count(), 14);
-    EXPECT_EQ(joined.split_pointel_count, 0);
-    EXPECT_EQ(component_euler_characteristics(joined), std::vector<std::int64_t>{2});
+    expect_no_pinched_edge(joined);
+    EXPECT_EQ(joined.component_count, 2);
+    EXPECT_EQ(joined.vertex_count(), 16);
+    EXPECT_EQ(joined.split_pointel_count, 2);
+    EXPECT_EQ(component_euler_characteristics(joined), (std::vector<std::int64_t>{2, 2}));
+}
+
+TEST(DigitalSurface, EdgeJoinedBelowAFullLayerKeepsTheConnectivityPairing) {
+    // Voxels (1,1,1) and (2,2,1) touch by the z-linel at x = y = 1.5, under a full 2×2 layer at
+    // z = 2: the top end pointel of the linel gets two vertices under one pairing, the bottom end
+    // under the other, so no pairing pinches and each connectivity keeps its own. Joining (26)
+    // splits the top end: the bottom end (1.5, 1.5, 0.5) keeps one vertex; apart (6), two.
+    const auto volume =
+        test::make_voxels({4, 4, 4}, {{1, 1, 1}, {2, 2, 1}, {1, 1, 2}, {2, 1, 2}, {1, 2, 2}, {2, 2, 2}});
+    const auto vertices_at_bottom_end = [](const DigitalSurface& s) {
+        int count = 0;
+        for (std::int64_t i = 0; i < s.vertex_count(); ++i)
+            count += (s.vertices.row(i) - Eigen::RowVector3d(1.5, 1.5, 0.5)).norm() == 0 ? 1 : 0;
+        return count;
+    };
+    for (Connectivity c : {Connectivity::Six, Connectivity::TwentySix}) {
+        const auto s = extract_digital_surface(volume, c);
+        expect_closed_manifold(s);
+        expect_no_pinched_edge(s);
+        EXPECT_EQ(s.component_count, 1);
+        EXPECT_EQ(vertices_at_bottom_end(s), c == Connectivity::TwentySix ? 1 : 2);
+    }
 }
 
 TEST(DigitalSurface, VoxelsTouchingByACorner) {
@@ -152,6 +188,7 @@ TEST(DigitalSurface, RandomVolumesAreClosedManifolds) {
         for (Connectivity c : {Connectivity::Six, Connectivity::TwentySix}) {
             const auto s = extract_digital_surface(volume, c);
             expect_closed_manifold(s);
+            expect_no_pinched_edge(s);
             expect_outward_orientation(s);
             for (std::int64_t chi : component_euler_characteristics(s)) {
                 EXPECT_LE(chi, 2);

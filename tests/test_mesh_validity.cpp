@@ -2,8 +2,12 @@
 // whose answer is known exactly, the meaning of "shares an edge / a vertex", the fold test, and
 // clean closed surfaces.
 #include <gtest/gtest.h>
+#include <omp.h>
 
+#include <algorithm>
 #include <cmath>
+#include <numeric>
+#include <random>
 
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/error.hpp"
@@ -122,6 +126,48 @@ TEST(MeshValidity, DigitalCubeAndSphereAreValid) {
     EXPECT_EQ(sphere.faces, surface.face_count());
 }
 
+TEST(SelfIntersections, ClosedSurfaceInAnyTriangleOrderIsClean) {
+    // The triangles are built into CGAL's mesh in the order given; a closed sphere whose
+    // triangles come in random order must still be found clean (no triangle refused and left to
+    // its own copies of the shared vertices).
+    const DigitalSurface surface = extract_digital_surface(test::make_ball(12, 4, 5.5), Connectivity::TwentySix);
+    PointMatrix on_sphere = surface.vertices;
+    for (Eigen::Index i = 0; i < on_sphere.rows(); ++i)
+        on_sphere.row(i) = Eigen::RowVector3d(5.5, 5.5, 5.5) + 4.0 * (on_sphere.row(i) - Eigen::RowVector3d(5.5, 5.5, 5.5)).normalized();
+    const FaceMatrix triangles = mesh_triangles(on_sphere, surface.quads);
+    std::vector<Eigen::Index> order(std::size_t(triangles.rows()));
+    std::iota(order.begin(), order.end(), 0);
+    std::shuffle(order.begin(), order.end(), std::mt19937(3));
+    FaceMatrix shuffled(triangles.rows(), 3);
+    for (std::size_t t = 0; t < order.size(); ++t) shuffled.row(Eigen::Index(t)) = triangles.row(order[t]);
+    const TriangleSelfIntersections found = triangle_self_intersections(on_sphere, shuffled);
+    EXPECT_TRUE(found.pairs.empty()) << found.pairs.size() << " pairs";
+    EXPECT_TRUE(found.degenerate.empty());
+}
+
+TEST(SelfIntersections, SplittingTheWorkOverThreadsFindsTheSamePairs) {
+    // Two spheres of radius 24 (about 30000 triangles each), the second moved by 5 along x: large
+    // enough for the test to be split in slabs, one per thread.
+    const DigitalSurface surface = extract_digital_surface(test::make_ball(52, 24, 25.5), Connectivity::TwentySix);
+    const Eigen::RowVector3d centre(25.5, 25.5, 25.5);
+    PointMatrix sphere = surface.vertices;
+    for (Eigen::Index i = 0; i < sphere.rows(); ++i) sphere.row(i) = centre + 24.0 * (sphere.row(i) - centre).normalized();
+    PointMatrix both(2 * sphere.rows(), 3);
+    both << sphere, (sphere.rowwise() + Eigen::RowVector3d(5, 0, 0));
+    FaceMatrix quads(2 * surface.face_count(), 4);
+    quads << surface.quads, (surface.quads.array() + std::int32_t(sphere.rows())).matrix();
+    const FaceMatrix triangles = mesh_triangles(both, quads);
+    const int threads = omp_get_max_threads();
+    omp_set_num_threads(1);
+    const TriangleSelfIntersections one = triangle_self_intersections(both, triangles);
+    omp_set_num_threads(std::max(threads, 2));
+    const TriangleSelfIntersections two = triangle_self_intersections(both, triangles);
+    omp_set_num_threads(threads);
+    EXPECT_GT(one.pairs.size(), 100u);
+    EXPECT_EQ(one.pairs, two.pairs);
+    EXPECT_EQ(one.degenerate, two.degenerate);
+}
+
 TEST(MeshValidity, OverlappingCubesIntersectOnExactlyTheFacesThatCross) {
     // Unit cubes A = [−½,½]³ (the voxel at the origin; faces 0–5) and B = A + (½,½,½) (faces
     // 6–11): A's far faces (x, y or z = ½) cross B's near faces (x, y or z = 0); no other pair meets.
@@ -152,6 +198,18 @@ TEST(MeshValidity, EdgeTouchingVoxelsTouchThemselves) {
     EXPECT_GT(v.intersecting_pairs, 0);
     EXPECT_EQ(v.folded_faces, 0);
     EXPECT_FALSE(v.valid());
+}
+
+TEST(MeshValidity, FoldTestLooksAtBothSplitsOfAQuad) {
+    // Quad (0,1,2,3) folded along its longer diagonal 1–3 only: vertex 2 lies on the far side of
+    // the line 1–3, so abd = (0,1,3) faces +z but bcd = (1,2,3) faces −z, while the split along
+    // the shorter diagonal 0–2 gives two triangles facing +z.
+    const PointMatrix p = points({{0, 0, 0}, {2, 0, 0}, {0.7, 0.7, 0}, {0, 2, 0}});
+    const FaceMatrix quad = faces({{0, 1, 2, 3}});
+    const PointMatrix up = points({{0, 0, 1}});
+    ASSERT_TRUE(triangle_self_intersections(p, mesh_triangles(p, quad)).pairs.empty());
+    ASSERT_EQ(mesh_triangles(p, quad), faces({{0, 1, 2}, {0, 2, 3}}));  // the shorter diagonal, 0–2
+    EXPECT_EQ(faces_folded_against_field(p, quad, up), (std::vector<std::int32_t>{0}));
 }
 
 TEST(MeshValidity, FoldTestLooksAtEachTriangleOfTheSplit) {

@@ -97,7 +97,7 @@ TEST(Pipeline, ReportsEveryStageOnceStartedThenFinishedInOrder) {
             open[e.stage] = 1;
         }
     }
-    EXPECT_EQ(finished, (std::vector<std::string>{"surface", "normals", "regularize"}));
+    EXPECT_EQ(finished, (std::vector<std::string>{"surface", "normals", "regularize", "validity"}));
 }
 
 TEST(Pipeline, AnInterruptFromTheProgressCallbackStopsTheRun) {

@@ -2,7 +2,8 @@
 //
 //   minimize  q(x) = ½ xᵀ R x − bᵀ x   subject to  lower ≤ x ≤ upper  (componentwise),
 //
-// with R sparse symmetric positive definite (both triangles stored). The regularization energy
+// with R sparse symmetric positive definite (both triangles stored); a bound may be infinite
+// (lower = −∞ or upper = +∞: the coordinate is free on that side). The regularization energy
 // of eq. (1) is E(x) = xᵀRx − 2bᵀx + constant = 2 q(x) + constant, so both have the same
 // minimizer; this is the problem of the clamped ("reversible") mode.
 //
@@ -100,8 +101,8 @@ BoxQpReport solve_box_qp_from_unconstrained(const Eigen::SparseMatrix<double>& R
 
 /// Minimizes q over the box. `x` is the starting point on entry (any point; it is projected) —
 /// typically the unconstrained minimizer — and the solution on exit (always inside the box).
-/// Throws dsreg::Error for inconsistent sizes, lower > upper, non-finite values or a failed
-/// factorization. Does not throw when the tolerance is not reached: see report.converged.
+/// Throws dsreg::Error for inconsistent sizes, lower > upper, a NaN bound, a lower bound of +∞ or
+/// an upper bound of −∞, a non-finite b or x, or a failed factorization. Does not throw when the tolerance is not reached: see report.converged.
 BoxQpReport solve_box_qp(const Eigen::SparseMatrix<double>& R, const Eigen::VectorXd& b, const Eigen::VectorXd& lower,
                          const Eigen::VectorXd& upper, Eigen::VectorXd& x, const BoxQpOptions& options = {});
 

@@ -10,6 +10,12 @@
 // object connectivity (6: the two diagonal voxels stay apart; 26: they join). Vertices: the
 // surfels around a pointel are split into their umbrella cycles, each with its own vertex. The
 // result is a closed 2-manifold: every edge has two faces, every vertex a disc.
+// One exception keeps it embeddable: where the connectivity's pairing would leave both end
+// pointels of such a linel with a single vertex, its two edges would join the same two vertices,
+// pinching the surface along a segment that no placement of the vertices can open (two voxels
+// touching by one edge and nothing else, with 26-connectivity). Such a linel takes the other
+// pairing, which gives each end pointel two vertices (docs/validity.md). So no two faces ever
+// run along the same pair of vertices in the same direction.
 #pragma once
 
 #include <Eigen/Core>

@@ -14,10 +14,11 @@
 //     surface, digital_surface.hpp) therefore count as an intersection: the surface touches
 //     itself there, which a solid's boundary must not do;
 //  3. (with a field u, one vector per face, e.g. the normals the regularization aligned to) no
-//     face folded against u: every triangle of the split has a normal n with n·u_f > 0, u_f
-//     the vector of the face it comes from. A folded quad is a crease or a face turned inside
-//     out; this is stricter than count_faces_against_field (evaluation.hpp), which looks only at
-//     the mean normal of the two triangles of a quad.
+//     face folded against u: every triangle the face can be split into has a normal n with
+//     n·u_f > 0 — for a quad (a,b,c,d) the four corner triangles abc, acd, abd, bcd, so that it
+//     holds along either diagonal, whichever a viewer splits along. A folded quad is a crease or
+//     a face turned inside out. This implies count_faces_against_field (evaluation.hpp) = 0,
+//     which looks only at the mean normal of abc and acd.
 // A closed oriented 2-manifold mesh satisfying 1–2 is the boundary of a solid (it bounds a
 // region, its winding number is 0 or 1 everywhere): it can be 3D printed, tetrahedralized,
 // used in a simulation.
@@ -69,9 +70,9 @@ struct MeshValidity {
 /// range, or a field of the wrong size.
 MeshValidity check_mesh_validity(const PointMatrix& vertices, const FaceMatrix& faces, const PointMatrix& field = {});
 
-/// Faces of `faces` (triangles or quads) with a triangle of the shorter-diagonal split whose
-/// normal has a non-positive dot product with that face's row of `field` (degenerate triangles
-/// included), sorted.
+/// Faces of `faces` (triangles or quads) folded against `field` (3 above): a triangle of either
+/// split of the quad (or the triangle itself) whose normal has a non-positive dot product with
+/// that face's row of `field`, degenerate triangles included. Sorted.
 std::vector<std::int32_t> faces_folded_against_field(const PointMatrix& vertices, const FaceMatrix& faces,
                                                      const PointMatrix& field);
 

@@ -31,6 +31,7 @@
 #include "dsreg/progress.hpp"
 #include "dsreg/regularization.hpp"
 #include "dsreg/solvers.hpp"
+#include "dsreg/validity_repair.hpp"
 #include "dsreg/volume.hpp"
 #include "dsreg/volume_io.hpp"
 #include "dsreg/voxel_array.hpp"
@@ -189,12 +190,20 @@ void check_regularization_extensions(const RegularizationExtensions& options);
 // ---------------------------------------------------------------------------------------------
 // The whole run.
 
+/// What happens to the solved mesh (mesh_validity.hpp, validity_repair.hpp, docs/validity.md).
+enum class ValidityMode {
+    Repair,  ///< checked for self-intersections and faces folded against u, repaired until valid (default)
+    Check,   ///< --no-repair: checked and reported, left as solved
+    Off,     ///< --no-check: neither
+};
+
 struct PipelineOptions {
     Connectivity connectivity = Connectivity::TwentySix;  ///< --connectivity 6|26
     NormalFieldOptions normals;
     double alpha = 1e-3, beta = 1.0, gamma = 1e-2;  ///< --alpha --beta --gamma (eq. 1)
     SolverKind solver = SolverKind::Auto;           ///< --solver
     RegularizationExtensions extensions;
+    ValidityMode validity = ValidityMode::Repair;   ///< --no-repair, --no-check
 };
 
 /// Checks every option of a run before any long computation. Throws dsreg::Error naming the flag.
@@ -210,9 +219,12 @@ struct PipelineResult {
     NormalField field;
     RegularizationWeights weights;  ///< as used (metric and local multipliers filled in)
     RegularizationResult regularization;
-    /// Faces the solve turned against their normal (where u itself points inward, e.g. on parts
-    /// thinner than the integral-invariant ball): reported, since they show as creases.
+    /// Faces of the final mesh whose mean normal points against u (count_faces_against_field).
     std::int64_t faces_against_field = 0;
+    /// The check and repair of the solved mesh (stage "validity"), unless ValidityMode::Off. With a
+    /// repair, regularization.positions and field.normals are the repaired ones (the solve's
+    /// energies stay in regularization; the repair's are here).
+    std::optional<ValidityRepairReport> validity;
     nlohmann::json extension_report;  ///< "metric", "local_weights", "shrink_correction", and "clamp" with --clamp
     std::vector<std::pair<std::string, double>> stage_seconds;  ///< wall time of each stage, in order
 };

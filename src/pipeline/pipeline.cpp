@@ -55,6 +55,68 @@ std::string component_text(std::int64_t count) {
     return std::to_string(count) + (count == 1 ? " component" : " components");
 }
 
+std::string validity_counts(const MeshValidity& v) {
+    std::string text = std::to_string(v.intersecting_pairs) + " intersecting triangle pairs, " +
+                       std::to_string(v.folded_faces) + " folded faces";
+    if (v.degenerate_triangles > 0) text += ", " + std::to_string(v.degenerate_triangles) + " degenerate triangles";
+    return text;
+}
+
+/// What the check and repair did, for the stage line and the summary line.
+std::string validity_text(const ValidityRepairReport& r, const RegularizationWeights& w) {
+    if (r.before.valid()) return "valid solid";
+    if (r.rounds == 0) return validity_counts(r.before) + " (not repaired)";
+    std::string text = "repaired " + validity_counts(r.before) + " in " + std::to_string(r.rounds) + " rounds (" +
+                       std::to_string(r.region_vertices) + " vertices, energy -> " +
+                       format("%.4g", r.energy_after.total(w)) + ")";
+    if (!r.after.valid()) text += ", left " + validity_counts(r.after);
+    return text;
+}
+
+nlohmann::json validity_counts_json(const MeshValidity& v) {
+    return {{"intersecting_pairs", v.intersecting_pairs},
+            {"degenerate_triangles", v.degenerate_triangles},
+            {"folded_faces", v.folded_faces},
+            {"valid", v.valid()}};
+}
+
+nlohmann::json validity_json(const ValidityRepairReport& r, const RegularizationWeights& w, ValidityMode mode) {
+    return {{"repair", mode == ValidityMode::Repair},
+            {"before", validity_counts_json(r.before)},
+            {"after", validity_counts_json(r.after)},
+            {"rounds", r.rounds},
+            {"region_vertices", r.region_vertices},
+            {"strengthened_vertices", r.strengthened_vertices},
+            {"held_vertices", r.held_vertices},
+            {"field_corrections", r.field_corrections},
+            {"parts_solved", r.parts_solved},
+            {"exact", r.exact},
+            {"converged", r.converged},
+            {"kkt_residual", r.max_kkt_residual},
+            {"max_displacement_voxels", r.max_displacement_voxels},
+            {"energy_before", energy_json(r.energy_before, w)},
+            {"energy_after", energy_json(r.energy_after, w)},
+            {"seconds", {{"check", r.check_seconds}, {"solve", r.solve_seconds}}}};
+}
+
+/// Stage "validity": checks the solved mesh and, unless ValidityMode::Check, repairs it.
+void check_and_repair(const PipelineOptions& o, PipelineResult& result, StageClock& clock) {
+    clock.start("validity");
+    ValidityRepairOptions options;
+    if (o.validity == ValidityMode::Check) options.max_rounds = 0;
+    if (o.extensions.clamp) {  // stay in the clamp boxes, and keep the split copies' targets inside them
+        options.clamp_half_width = o.extensions.clamp_half_width;
+        options.split_offset = std::min(options.split_offset, 0.5 * o.extensions.clamp_half_width);
+        options.qp.tolerance = o.extensions.clamp_tolerance;
+    }
+    ValidityRepairResult repaired = repair_validity(result.surface, result.field.normals, result.weights,
+                                                    result.regularization.positions, options, clock.progress());
+    result.regularization.positions = std::move(repaired.positions);
+    result.field.normals = std::move(repaired.normals);
+    result.validity = repaired.report;
+    clock.finish(validity_text(*result.validity, result.weights));
+}
+
 /// Stages 2–4 on a loaded volume; `clock` may already hold the read stage.
 PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, StageClock& clock) {
     PipelineResult result;
@@ -85,6 +147,7 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
                                                result.weights, solver, result.extension_report);
     clock.finish(result.regularization.solve.solver + ", relative residual " +
                  format("%.2e", result.regularization.solve.relative_residual));
+    if (o.validity != ValidityMode::Off) check_and_repair(o, result, clock);
     result.faces_against_field =
         count_faces_against_field(result.regularization.positions, result.surface.quads, result.field.normals);
     result.stage_seconds = clock.stage_seconds();
@@ -268,6 +331,7 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
                        {"unknowns", 3 * surface.vertex_count()}};
     report["energy_before"] = energy_json(r.regularization.energy_before, r.weights);
     report["energy_after"] = energy_json(r.regularization.energy_after, r.weights);
+    report["validity"] = r.validity ? validity_json(*r.validity, r.weights, o.validity) : nlohmann::json(nullptr);
     nlohmann::json stages = nlohmann::json::object();
     for (const auto& [name, seconds] : r.stage_seconds) stages[name] = seconds;
     stages["assembly"] = r.regularization.assembly_seconds;
@@ -288,7 +352,10 @@ std::string summary_line(const PipelineResult& r, const PipelineOptions& o) {
          << component_text(r.surface.component_count) << "; energy " << format("%.4g", reg.energy_before.total(r.weights))
          << " -> " << format("%.4g", reg.energy_after.total(r.weights)) << "; " << reg.solve.solver << " residual "
          << format("%.1e", reg.solve.relative_residual);
-    if (r.faces_against_field > 0) line << "; " << r.faces_against_field << " faces folded against u";
+    if (r.validity)
+        line << "; " << validity_text(*r.validity, r.weights);
+    else if (r.faces_against_field > 0)
+        line << "; " << r.faces_against_field << " faces folded against u";
     if (r.field.at)
         line << "; Ambrosio-Tortorelli " << r.field.at->total_rounds() << " rounds, "
              << (r.field.at->features.array() < o.normals.feature_threshold).count() << " feature vertices";

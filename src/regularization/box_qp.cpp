@@ -53,8 +53,13 @@ void check_problem(const SparseMatrix& R, const Eigen::VectorXd& b, const Eigen:
     if (R.rows() != n || R.cols() != n || lower.size() != n || upper.size() != n)
         throw Error("box QP: inconsistent sizes (matrix " + std::to_string(R.rows()) + "x" + std::to_string(R.cols()) + ", " +
                     std::to_string(n) + " unknowns)");
-    if (!b.allFinite() || !lower.allFinite() || !upper.allFinite())
-        throw Error("box QP: non-finite right-hand side or bound");
+    if (!b.allFinite()) throw Error("box QP: non-finite right-hand side");
+    // Infinite bounds leave a coordinate free on that side; a bound of NaN, a lower bound of +∞
+    // or an upper bound of −∞ admits no point.
+    const double infinity = std::numeric_limits<double>::infinity();
+    for (Eigen::Index i = 0; i < n; ++i)
+        if (std::isnan(lower[i]) || std::isnan(upper[i]) || lower[i] == infinity || upper[i] == -infinity)
+            throw Error("box QP: invalid bound at coordinate " + std::to_string(i));
     for (Eigen::Index i = 0; i < n; ++i)
         if (lower[i] > upper[i])
             throw Error("box QP: lower bound " + std::to_string(lower[i]) + " above upper bound " + std::to_string(upper[i]) +

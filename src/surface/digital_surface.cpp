@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <numeric>
 #include <string>
+#include <tuple>
 
 #include "dsreg/error.hpp"
 
@@ -133,8 +134,9 @@ std::int64_t find_surfel(const SurfelIndex& index, const VoxelGrid& g, const std
 /// normal n) and the convex turn (voxel v, normal t). Where v and v+t+n touch only along this
 /// edge (v+t is background), 26-connectivity joins them (concave) and 6-connectivity keeps
 /// them apart (convex). Both rules are symmetric, so faces pair up consistently.
+/// `four_surfels` tells whether the linel has four surfels (v and v+t+n touch only along it).
 std::int64_t neighbor_across_edge(const BinaryVolume& volume, const SurfelIndex& index, const Surfel& s, int e,
-                                  Connectivity connectivity) {
+                                  Connectivity connectivity, bool& four_surfels) {
     const auto [t_axis, t_sign] = edge_crossing_direction(s, e);
     const std::int64_t v[3] = {s.voxel[0], s.voxel[1], s.voxel[2]};
     std::int64_t flat[3] = {v[0], v[1], v[2]};
@@ -143,6 +145,7 @@ std::int64_t neighbor_across_edge(const BinaryVolume& volume, const SurfelIndex&
     diagonal[s.axis] += s.sign;
     const bool flat_inside = volume.inside(flat[0], flat[1], flat[2]);
     const bool diagonal_inside = volume.inside(diagonal[0], diagonal[1], diagonal[2]);
+    four_surfels = diagonal_inside && !flat_inside;
     const bool concave = diagonal_inside && (flat_inside || connectivity == Connectivity::TwentySix);
     if (concave) return find_surfel(index, volume.grid, diagonal, t_axis, -t_sign);
     if (flat_inside) return find_surfel(index, volume.grid, flat, s.axis, s.sign);
@@ -157,18 +160,21 @@ int edge_joining(const std::array<Pointel, 4>& corners, const Pointel& from, con
 }
 
 /// Fills adjacent_face and returns, per face edge, the matching edge index in the adjacent face.
+/// `four_surfel_edges` gets, per face, bit e set when its edge e lies on a linel of four surfels.
 std::vector<std::int8_t> pair_face_edges(const BinaryVolume& volume, const SurfelIndex& index, Connectivity connectivity,
-                                         FaceMatrix& adjacent_face) {
+                                         FaceMatrix& adjacent_face, std::vector<std::uint8_t>& four_surfel_edges) {
     const std::int64_t m = static_cast<std::int64_t>(index.surfels.size());
     adjacent_face.resize(m, 4);
     std::vector<std::int8_t> adjacent_edge(static_cast<std::size_t>(4 * m));
+    four_surfel_edges.assign(static_cast<std::size_t>(m), 0);
     bool inconsistent = false;
 #pragma omp parallel for schedule(static)
     for (std::int64_t f = 0; f < m; ++f) {
         const Surfel& s = index.surfels[static_cast<std::size_t>(f)];
         const auto corners = corner_pointels(s);
         for (int e = 0; e < 4; ++e) {
-            const std::int64_t g = neighbor_across_edge(volume, index, s, e, connectivity);
+            bool four_surfels = false;
+            const std::int64_t g = neighbor_across_edge(volume, index, s, e, connectivity, four_surfels);
             const int edge = g < 0 ? -1 : edge_joining(corner_pointels(index.surfels[static_cast<std::size_t>(g)]),
                                                        corners[(e + 1) % 4], corners[e]);
             if (edge < 0) {
@@ -177,6 +183,7 @@ std::vector<std::int8_t> pair_face_edges(const BinaryVolume& volume, const Surfe
             }
             adjacent_face(f, e) = static_cast<std::int32_t>(g);
             adjacent_edge[static_cast<std::size_t>(4 * f + e)] = static_cast<std::int8_t>(edge);
+            if (four_surfels) four_surfel_edges[static_cast<std::size_t>(f)] |= std::uint8_t(1u << e);
         }
     }
     if (inconsistent) throw Error("internal error: digital surface edge pairing is inconsistent");
@@ -218,6 +225,57 @@ void build_vertices(DigitalSurface& surface, const std::vector<std::int8_t>& adj
         surface.vertices.row(i) = surface.grid.pointel_position(p[0], p[1], p[2]).transpose();
         for (int d = 0; d < 3; ++d) surface.vertex_pointels(i, d) = static_cast<std::int32_t>(p[d]);
     }
+}
+
+/// Glues edge e of face f to edge h of face g (both ways).
+void glue(DigitalSurface& surface, std::vector<std::int8_t>& adjacent_edge, std::int32_t f, int e, std::int32_t g, int h) {
+    surface.adjacent_face(f, e) = g;
+    surface.adjacent_face(g, h) = f;
+    adjacent_edge[static_cast<std::size_t>(4 * f + e)] = static_cast<std::int8_t>(h);
+    adjacent_edge[static_cast<std::size_t>(4 * g + h)] = static_cast<std::int8_t>(e);
+}
+
+/// A linel of four surfels f1, f2, f3, f4 (f1 and f3 run along it in the same direction, f2 and
+/// f4 the other way) is glued f1–f2, f3–f4 or f1–f4, f3–f2. If both its end pointels come out
+/// with a single vertex, its two glued edges join the same two vertices: the surface is pinched
+/// along the linel, and no mesh with straight edges can separate the two sheets there (e.g. two
+/// voxels touching by one edge, joined by 26-connectivity). The other gluing splits both end
+/// vertices in two (around each end pointel the umbrella through the linel twice becomes two
+/// umbrellas), which the regularization can pull apart. Re-glues such linels, at most one per
+/// vertex per call (two re-gluings at one pointel could merge its umbrellas again); returns how
+/// many. The vertices must be rebuilt afterwards.
+std::int64_t reglue_pinched_linels(DigitalSurface& surface, std::vector<std::int8_t>& adjacent_edge,
+                                   const std::vector<std::uint8_t>& four_surfel_edges) {
+    struct FaceEdge {
+        std::int32_t from, to, face;
+        int edge;
+        bool operator<(const FaceEdge& o) const { return std::tie(from, to, face) < std::tie(o.from, o.to, o.face); }
+    };
+    std::vector<FaceEdge> edges;
+    for (std::int64_t f = 0; f < surface.face_count(); ++f)
+        for (int e = 0; e < 4; ++e)
+            if (four_surfel_edges[static_cast<std::size_t>(f)] & (1u << e))
+                edges.push_back({surface.quads(f, e), surface.quads(f, (e + 1) % 4), std::int32_t(f), e});
+    std::sort(edges.begin(), edges.end());
+    std::vector<std::int32_t> touched;
+    std::int64_t reglued = 0;
+    for (std::size_t i = 0; i + 1 < edges.size(); ++i) {
+        const FaceEdge &one = edges[i], &three = edges[i + 1];
+        if (one.from != three.from || one.to != three.to) continue;
+        if (std::find(touched.begin(), touched.end(), one.from) != touched.end() ||
+            std::find(touched.begin(), touched.end(), one.to) != touched.end())
+            continue;
+        touched.push_back(one.from);
+        touched.push_back(one.to);
+        const std::int32_t two = surface.adjacent_face(one.face, one.edge), four = surface.adjacent_face(three.face, three.edge);
+        const int two_edge = adjacent_edge[static_cast<std::size_t>(4 * one.face + one.edge)];
+        const int four_edge = adjacent_edge[static_cast<std::size_t>(4 * three.face + three.edge)];
+        glue(surface, adjacent_edge, one.face, one.edge, four, four_edge);
+        glue(surface, adjacent_edge, three.face, three.edge, two, two_edge);
+        ++reglued;
+        ++i;
+    }
+    return reglued;
 }
 
 void label_components(DigitalSurface& surface) {
@@ -267,10 +325,17 @@ DigitalSurface extract_digital_surface(const BinaryVolume& volume, Connectivity 
 
     DigitalSurface surface;
     surface.grid = g;
-    const std::vector<std::int8_t> adjacent_edge = pair_face_edges(volume, index, connectivity, surface.adjacent_face);
+    std::vector<std::uint8_t> four_surfel_edges;
+    std::vector<std::int8_t> adjacent_edge =
+        pair_face_edges(volume, index, connectivity, surface.adjacent_face, four_surfel_edges);
     surface.surfels = std::move(index.surfels);
     index = SurfelIndex();
     build_vertices(surface, adjacent_edge);
+    while (reglue_pinched_linels(surface, adjacent_edge, four_surfel_edges) > 0) {
+        const std::int64_t before = surface.vertex_count();
+        build_vertices(surface, adjacent_edge);
+        if (surface.vertex_count() <= before) throw Error("internal error: re-gluing a pinched linel split no vertex");
+    }
     label_components(surface);
     surface.split_pointel_count = count_split_pointels(surface);
     return surface;

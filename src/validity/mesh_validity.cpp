@@ -41,16 +41,27 @@ std::vector<std::int32_t> faces_folded_against_field(const PointMatrix& vertices
     if (field.rows() != faces.rows())
         throw Error("fold test: " + std::to_string(field.rows()) + " field vectors for " + std::to_string(faces.rows()) +
                     " faces");
-    const FaceMatrix triangles = mesh_triangles(vertices, faces);
-    const Eigen::Index per_face = faces.cols() == 4 ? 2 : 1;
+    if (faces.rows() > 0 && faces.cols() != 3 && faces.cols() != 4)
+        throw Error("fold test: faces have " + std::to_string(faces.cols()) + " vertices; triangles or quads only");
+    if (faces.size() > 0 && (faces.minCoeff() < 0 || faces.maxCoeff() >= vertices.rows()))
+        throw Error("fold test: a face refers to a vertex out of range (the mesh has " + std::to_string(vertices.rows()) +
+                    " vertices)");
+    // Corner triangles: the two splits of a quad (a,b,c,d), along ac and along bd.
+    static constexpr int kQuadCorners[4][3] = {{0, 1, 2}, {0, 2, 3}, {0, 1, 3}, {1, 2, 3}};
+    static constexpr int kTriangle[1][3] = {{0, 1, 2}};
+    const bool quads = faces.cols() == 4;
     std::vector<std::int32_t> folded;
-    for (Eigen::Index t = 0; t < triangles.rows(); ++t) {
-        const Eigen::Vector3d a = vertices.row(triangles(t, 0)), b = vertices.row(triangles(t, 1)),
-                              c = vertices.row(triangles(t, 2));
-        const Eigen::Index f = t / per_face;
-        // Not normalized: the sign of (b−a)×(c−a)·u is the fold test, and 0 (no area) fails it.
-        if (!((b - a).cross(c - a).dot(field.row(f).transpose()) > 0) && (folded.empty() || folded.back() != f))
-            folded.push_back(std::int32_t(f));
+    for (Eigen::Index f = 0; f < faces.rows(); ++f) {
+        const Eigen::Vector3d u = field.row(f).transpose();
+        bool against = false;
+        for (int t = 0; t < (quads ? 4 : 1) && !against; ++t) {
+            const int* corner = quads ? kQuadCorners[t] : kTriangle[t];
+            const Eigen::Vector3d a = vertices.row(faces(f, corner[0])), b = vertices.row(faces(f, corner[1])),
+                                  c = vertices.row(faces(f, corner[2]));
+            // Not normalized: the sign of (b−a)×(c−a)·u is the fold test, and 0 (no area) fails it.
+            against = !((b - a).cross(c - a).dot(u) > 0);
+        }
+        if (against) folded.push_back(std::int32_t(f));
     }
     return folded;
 }

@@ -3,6 +3,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <iterator>
@@ -58,14 +59,79 @@ CgalMesh make_cgal_mesh(const PointMatrix& vertices, const FaceMatrix& triangles
     return mesh;
 }
 
+/// The faces in slabs along the longest axis of the mesh, one slab per thread: a face belongs to
+/// every slab its bounding box meets, so two faces whose boxes meet share a slab, and testing each
+/// slab on its own finds every intersecting pair (some in two slabs).
+std::vector<std::vector<CgalFace>> slabs_of(const CgalMesh& mesh, int count) {
+    std::vector<CGAL::Bbox_3> boxes;
+    boxes.reserve(mesh.number_of_faces());
+    CGAL::Bbox_3 all;
+    for (const CgalFace f : mesh.faces()) {
+        CGAL::Bbox_3 box;
+        for (const CgalVertex v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) box += mesh.point(v).bbox();
+        boxes.push_back(box);
+        all += box;
+    }
+    int axis = 0;
+    for (int d = 1; d < 3; ++d)
+        if (all.max(d) - all.min(d) > all.max(axis) - all.min(axis)) axis = d;
+    // Cuts at the quantiles of the box centres, so that the slabs hold as many faces each.
+    std::vector<double> centres;
+    centres.reserve(boxes.size());
+    for (const CGAL::Bbox_3& box : boxes) centres.push_back(0.5 * (box.min(axis) + box.max(axis)));
+    std::vector<double> cuts;
+    for (int k = 1; k < count; ++k) {
+        auto at = centres.begin() + std::ptrdiff_t(centres.size() * std::size_t(k) / std::size_t(count));
+        std::nth_element(centres.begin(), at, centres.end());
+        cuts.push_back(*at);
+    }
+    std::sort(cuts.begin(), cuts.end());
+    std::vector<std::vector<CgalFace>> slabs(static_cast<std::size_t>(count));
+    std::size_t index = 0;
+    for (const CgalFace f : mesh.faces()) {
+        const CGAL::Bbox_3& box = boxes[index++];
+        const std::size_t first = std::size_t(std::upper_bound(cuts.begin(), cuts.end(), box.min(axis)) - cuts.begin());
+        const std::size_t last = std::size_t(std::upper_bound(cuts.begin(), cuts.end(), box.max(axis)) - cuts.begin());
+        for (std::size_t k = first; k <= last; ++k) slabs[k].push_back(f);
+    }
+    return slabs;
+}
+
+/// CGAL's self-intersection test, its work split in slabs over the available threads (CGAL's own
+/// parallel version needs TBB). Pairs found twice are merged by the caller.
+std::vector<std::pair<CgalFace, CgalFace>> cgal_self_intersections(const CgalMesh& mesh) {
+    constexpr std::size_t faces_per_thread = 20000;  // below that, one slab: splitting costs more than it saves
+    const int threads = int(std::min<std::size_t>(std::size_t(std::max(omp_get_max_threads(), 1)),
+                                                  std::max<std::size_t>(mesh.number_of_faces() / faces_per_thread, 1)));
+    std::vector<std::pair<CgalFace, CgalFace>> found;
+    if (threads == 1) {
+        CGAL::Polygon_mesh_processing::self_intersections(mesh, std::back_inserter(found));
+        return found;
+    }
+    const std::vector<std::vector<CgalFace>> slabs = slabs_of(mesh, threads);
+    std::vector<std::vector<std::pair<CgalFace, CgalFace>>> per_slab(slabs.size());
+    bool failed = false;
+#pragma omp parallel for schedule(static, 1) num_threads(threads)
+    for (int k = 0; k < threads; ++k) {
+        try {
+            CGAL::Polygon_mesh_processing::self_intersections(slabs[std::size_t(k)], mesh,
+                                                              std::back_inserter(per_slab[std::size_t(k)]));
+        } catch (...) {
+            failed = true;  // benign race: only ever set to true
+        }
+    }
+    if (failed) throw Error("self-intersection test: CGAL failed");
+    for (const auto& pairs : per_slab) found.insert(found.end(), pairs.begin(), pairs.end());
+    return found;
+}
+
 }  // namespace
 
 TriangleSelfIntersections triangle_self_intersections(const PointMatrix& vertices, const FaceMatrix& triangles) {
     check_triangle_mesh(vertices, triangles);
     std::vector<std::int64_t> triangle_of;
     const CgalMesh mesh = make_cgal_mesh(vertices, triangles, triangle_of);
-    std::vector<std::pair<CgalFace, CgalFace>> found;
-    CGAL::Polygon_mesh_processing::self_intersections(mesh, std::back_inserter(found));
+    const std::vector<std::pair<CgalFace, CgalFace>> found = cgal_self_intersections(mesh);
 
     TriangleSelfIntersections result;
     for (const auto& [f, g] : found) {
@@ -76,7 +142,9 @@ TriangleSelfIntersections triangle_self_intersections(const PointMatrix& vertice
             result.pairs.emplace_back(std::min(a, b), std::max(a, b));
     }
     std::sort(result.pairs.begin(), result.pairs.end());
+    result.pairs.erase(std::unique(result.pairs.begin(), result.pairs.end()), result.pairs.end());
     std::sort(result.degenerate.begin(), result.degenerate.end());
+    result.degenerate.erase(std::unique(result.degenerate.begin(), result.degenerate.end()), result.degenerate.end());
     return result;
 }
 

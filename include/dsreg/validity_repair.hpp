@@ -1,0 +1,119 @@
+// dsreg — repair of the regularized mesh until it is a valid solid: no self-intersection, no face
+// folded against the field u (the definition is in mesh_validity.hpp; docs/validity.md has the
+// method and the measurements).
+//
+// Why meshes go wrong. The data term of eq. (1) is weak (α = 1e-3 against β = 1), so vertices
+// slide along the surface, often by more than a voxel, wherever that helps the alignment; where u
+// varies quickly (noise, high curvature, parts thinner than the integral-invariant ball, where u
+// is wrong and may even point into the object) neighbouring faces slide over each other, turn
+// over, or the two sides of a thin part pass through each other. Nothing in E keeps a face on its
+// side: alignment only asks the edges to be perpendicular to u, which a face turned over
+// satisfies as well.
+//
+// Method: a stronger data term where the mesh is invalid, until it is valid.
+//  * Each vertex i has a target t_i: its digital position p_i, except that the copies of a split
+//    pointel (digital_surface.hpp), which sit at the same place and so touch, are moved
+//    `split_offset` voxel (along each axis, times the spacing) towards the centroid of their own
+//    faces. The targets form a valid mesh (tested on random volumes, both connectivities).
+//  * E' = E + Σ_i (m_i − 1) α α_i w0_i |x_i − t_i|² (eq. 1 and its weights; m_i = 1 at first).
+//  * Round k: the mesh x is checked (check_mesh_validity with the field, incrementally: only the
+//    triangles that moved and those near them are tested again). Each vertex of an invalid face
+//    gets m_i ← max(m_i·`alpha_step`, `alpha_start`), or, once m_i reached `alpha_cap`, is held
+//    at its target; the `grade_rings` rings around get at least m_i / `alpha_grade` per ring, so
+//    that the pulled vertices join the rest smoothly (pulling single vertices makes their
+//    neighbours fold). The region U grows by these vertices and their `region_rings` rings. Then
+//    E' is minimized over the free vertices of U within `window_rings` of them, everything else
+//    held (the rows of R and b of eq. 22 plus the terms above, each connected part of the
+//    window solved exactly by sparse Cholesky).
+//  * A face whose u points into the object or nearly along the face (u·n_s < `field_margin`, n_s
+//    its surfel's outward axis normal, which the voxels make certain) cannot be unfolded by
+//    pulling vertices to their digital positions, where its normal is n_s. When such a face is
+//    folded, its u is replaced by the nearest unit vector with u·n_s = field_margin (same
+//    tangential direction): E' uses it, and the result carries the corrected field.
+//  * Once valid, E' is minimized over the whole of U at once (every vertex outside U at p*, the
+//    held ones at their targets) and checked again, back to the rounds if that undid anything.
+// Each round raises the data weight of what is still invalid, so in the limit all of it is held on
+// its (valid) targets: the repair always ends with a valid mesh, after few rounds in practice.
+// What it costs is measured by E: energy_before = E(p*), energy_after = E(x), both with the input
+// weights and field. x is the exact minimizer of E' over U (report.max_kkt_residual: the relative
+// residual of that problem at x), so the rise is what the stronger data term on the invalid
+// vertices costs, and nothing outside U changes.
+// With the reversible mode (clamped_regularization.hpp) every solve keeps the vertices in their
+// clamp boxes (box QP, box_qp.hpp), so the repaired mesh still re-digitizes to the input.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "dsreg/box_qp.hpp"
+#include "dsreg/digital_surface.hpp"
+#include "dsreg/mesh.hpp"
+#include "dsreg/mesh_validity.hpp"
+#include "dsreg/progress.hpp"
+#include "dsreg/regularization.hpp"
+
+namespace dsreg {
+
+struct ValidityRepairOptions {
+    double alpha_start = 10;   ///< first factor of α_i on a vertex of an invalid face
+    double alpha_step = 10;    ///< then × this each round it is still invalid (> 1)
+    double alpha_cap = 1000;   ///< a vertex whose factor reached this and is still invalid is held
+    double alpha_grade = 3;    ///< the rings around a strengthened vertex get its factor / this per ring
+    int grade_rings = 2;       ///< rings graded so
+    int region_rings = 2;      ///< the region U: the strengthened vertices and this many rings (≥ grade_rings)
+    int window_rings = 4;      ///< each round re-solves the region within this many rings of them
+    double split_offset = 0.1;  ///< voxels: the targets of the copies of a split pointel move apart
+    double field_margin = 0.2;  ///< corrected faces get u·n_s = this (about 78° from n_s at most)
+    int max_rounds = 40;
+    BoxQpOptions qp;            ///< KKT tolerance of the solves in the reversible mode
+    /// Reversible mode: the clamp half-width (voxels, < ½); every local solve keeps the clamp boxes.
+    std::optional<double> clamp_half_width;
+};
+
+struct ValidityRepairReport {
+    MeshValidity before;  ///< of p*, with the input field
+    MeshValidity after;   ///< of the mesh returned, with the field returned
+    int rounds = 0;       ///< rounds that solved something (0: p* was valid)
+    std::int64_t region_vertices = 0;        ///< |U|
+    std::int64_t strengthened_vertices = 0;  ///< vertices whose α_i was multiplied
+    std::int64_t held_vertices = 0;          ///< of which held at their target
+    std::int64_t field_corrections = 0;      ///< faces whose u was replaced
+    std::int64_t parts_solved = 0;           ///< local solves, over all rounds
+    bool converged = true;                   ///< every box QP (reversible mode) reached its tolerance
+    /// x minimizes E' over the whole region (false: the last exact solve undid part of the repair,
+    /// so x is the valid state before it, which minimizes E' over the last windows only).
+    bool exact = false;
+    double max_kkt_residual = 0;             ///< largest relative (KKT) residual of the final solve of a part
+    double max_displacement_voxels = 0;      ///< max_i |x_i − p*_i| / smallest spacing
+    EnergyTerms energy_before;               ///< E(p*), input weights and field
+    EnergyTerms energy_after;                ///< E(x), input weights and field
+    double check_seconds = 0;                ///< validity checks
+    double solve_seconds = 0;                ///< local solves
+};
+
+struct ValidityRepairResult {
+    PointMatrix positions;  ///< x
+    PointMatrix normals;    ///< the field with its corrections (the input field where none)
+    Eigen::VectorXd alpha_factors;     ///< m_i of E' (1 outside the strengthened vertices)
+    PointMatrix targets;               ///< t (repair_targets), empty if nothing was repaired
+    std::vector<std::int32_t> region;  ///< U, sorted
+    std::vector<std::int32_t> held;    ///< vertices held at their target, sorted
+    ValidityRepairReport report;
+};
+
+/// Checks p* and repairs it as above. `weights` are those of the solve. Reports each round to
+/// `progress` (stage "repair"). Throws dsreg::Error for inconsistent sizes or options.
+ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointMatrix& normals,
+                                     const RegularizationWeights& weights, const PointMatrix& positions,
+                                     const ValidityRepairOptions& options = {}, const ProgressCallback& progress = {});
+
+/// The targets t of the repair: the digital positions, the copies of each split pointel moved
+/// `split_offset` voxel (along each axis, times the spacing) towards the centroid of their faces.
+PointMatrix repair_targets(const DigitalSurface& surface, double split_offset);
+
+/// The unit vector nearest to u with u·n ≥ margin: u itself if it qualifies, else its tangential
+/// direction tilted to u·n = margin (n itself when u = −n). n unit, margin in [0, 1).
+Eigen::Vector3d lift_into_half_space(const Eigen::Vector3d& u, const Eigen::Vector3d& n, double margin);
+
+}  // namespace dsreg

@@ -1,0 +1,183 @@
+// dsreg — incremental validity checks (incremental_validity.hpp).
+#include "incremental_validity.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <unordered_map>
+
+#include "dsreg/evaluation.hpp"
+
+namespace dsreg::validity_internal {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct Box {
+    Eigen::Array3d low, high;
+    bool overlaps(const Box& o) const { return (low <= o.high).all() && (o.low <= high).all(); }
+};
+
+Box triangle_box(const PointMatrix& vertices, const FaceMatrix& triangles, Eigen::Index t) {
+    Box box{vertices.row(triangles(t, 0)).transpose().array(), vertices.row(triangles(t, 0)).transpose().array()};
+    for (int k = 1; k < 3; ++k) {
+        box.low = box.low.min(vertices.row(triangles(t, k)).transpose().array());
+        box.high = box.high.max(vertices.row(triangles(t, k)).transpose().array());
+    }
+    return box;
+}
+
+/// Triangles bucketed by the cubic cells their bounding boxes overlap.
+class BoxGrid {
+public:
+    BoxGrid(const std::vector<Box>& boxes, double cell) : boxes_(boxes), cell_(cell) {
+        for (std::size_t t = 0; t < boxes.size(); ++t) for_cells(boxes[t], [&](std::int64_t key) { cells_[key].push_back(std::int64_t(t)); });
+    }
+
+    /// Triangles whose box overlaps `box`, appended to `out` (possibly repeated).
+    void query(const Box& box, std::vector<std::int64_t>& out) const {
+        for_cells(box, [&](std::int64_t key) {
+            const auto it = cells_.find(key);
+            if (it == cells_.end()) return;
+            for (const std::int64_t t : it->second)
+                if (boxes_[std::size_t(t)].overlaps(box)) out.push_back(t);
+        });
+    }
+
+private:
+    template <class Visit>
+    void for_cells(const Box& box, Visit visit) const {
+        const Eigen::Array3i low = (box.low / cell_).floor().cast<int>(), high = (box.high / cell_).floor().cast<int>();
+        for (int z = low.z(); z <= high.z(); ++z)
+            for (int y = low.y(); y <= high.y(); ++y)
+                for (int x = low.x(); x <= high.x(); ++x)
+                    visit((std::int64_t(x) & 0x1fffff) | ((std::int64_t(y) & 0x1fffff) << 21) | ((std::int64_t(z) & 0x1fffff) << 42));
+    }
+
+    const std::vector<Box>& boxes_;
+    double cell_;
+    std::unordered_map<std::int64_t, std::vector<std::int64_t>> cells_;
+};
+
+void sort_unique(std::vector<std::int64_t>& values) {
+    std::sort(values.begin(), values.end());
+    values.erase(std::unique(values.begin(), values.end()), values.end());
+}
+
+}  // namespace
+
+IncrementalValidity::IncrementalValidity(const PointMatrix& vertices, const FaceMatrix& quads, const PointMatrix& field)
+    : quads_(quads), quads_of_vertex_(std::size_t(vertices.rows())) {
+    const auto started = Clock::now();
+    for (Eigen::Index q = 0; q < quads.rows(); ++q)
+        for (int k = 0; k < 4; ++k) quads_of_vertex_[std::size_t(quads(q, k))].push_back(std::int32_t(q));
+    triangles_ = mesh_triangles(vertices, quads);
+    const TriangleSelfIntersections found = triangle_self_intersections(vertices, triangles_);
+    pairs_ = found.pairs;
+    degenerate_.assign(std::size_t(triangles_.rows()), 0);
+    for (const std::int64_t t : found.degenerate) degenerate_[std::size_t(t)] = 1;
+    folded_.assign(std::size_t(quads.rows()), 0);
+    for (const std::int32_t q : faces_folded_against_field(vertices, quads, field)) folded_[std::size_t(q)] = 1;
+    seconds_ = std::chrono::duration<double>(Clock::now() - started).count();
+}
+
+void IncrementalValidity::update(const PointMatrix& vertices, const std::vector<std::int32_t>& moved,
+                                 const std::vector<std::int32_t>& refield, const PointMatrix& field) {
+    const auto started = Clock::now();
+    std::vector<std::int32_t> quads = refield;
+    for (const std::int32_t v : moved) quads.insert(quads.end(), quads_of_vertex_[std::size_t(v)].begin(), quads_of_vertex_[std::size_t(v)].end());
+    std::sort(quads.begin(), quads.end());
+    quads.erase(std::unique(quads.begin(), quads.end()), quads.end());
+    if (!quads.empty()) retest(vertices, quads, field);
+    seconds_ += std::chrono::duration<double>(Clock::now() - started).count();
+}
+
+void IncrementalValidity::retest(const PointMatrix& vertices, const std::vector<std::int32_t>& quads_to_test,
+                                 const PointMatrix& field) {
+    // The split and the fold test of the quads concerned.
+    FaceMatrix subset(Eigen::Index(quads_to_test.size()), 4);
+    PointMatrix subset_field(subset.rows(), 3);
+    for (std::size_t k = 0; k < quads_to_test.size(); ++k) {
+        subset.row(Eigen::Index(k)) = quads_.row(quads_to_test[k]);
+        subset_field.row(Eigen::Index(k)) = field.row(quads_to_test[k]);
+    }
+    const FaceMatrix split = mesh_triangles(vertices, subset);
+    std::vector<std::int64_t> changed;
+    for (std::size_t k = 0; k < quads_to_test.size(); ++k) {
+        const std::int64_t q = quads_to_test[k];
+        triangles_.row(2 * q) = split.row(2 * Eigen::Index(k));
+        triangles_.row(2 * q + 1) = split.row(2 * Eigen::Index(k) + 1);
+        changed.push_back(2 * q);
+        changed.push_back(2 * q + 1);
+        folded_[std::size_t(q)] = 0;
+    }
+    for (const std::int32_t k : faces_folded_against_field(vertices, subset, subset_field)) folded_[std::size_t(quads_to_test[std::size_t(k)])] = 1;
+
+    // The changed triangles and every triangle whose box meets one of theirs.
+    std::vector<Box> boxes(std::size_t(triangles_.rows()));
+    double extent = 0;
+    for (Eigen::Index t = 0; t < triangles_.rows(); ++t) {
+        boxes[std::size_t(t)] = triangle_box(vertices, triangles_, t);
+        extent += (boxes[std::size_t(t)].high - boxes[std::size_t(t)].low).maxCoeff();
+    }
+    const double cell = std::max(2 * extent / double(std::max<Eigen::Index>(triangles_.rows(), 1)), 1e-12);
+    const BoxGrid grid(boxes, cell);
+    std::vector<std::int64_t> tested = changed;
+    for (const std::int64_t t : changed) grid.query(boxes[std::size_t(t)], tested);
+    sort_unique(tested);
+
+    // Test them together, on compact vertex indices (shared indices stay shared).
+    std::unordered_map<std::int32_t, std::int32_t> local;
+    PointMatrix sub_vertices(Eigen::Index(3 * tested.size()), 3);
+    FaceMatrix sub_triangles(Eigen::Index(tested.size()), 3);
+    for (std::size_t k = 0; k < tested.size(); ++k)
+        for (int c = 0; c < 3; ++c) {
+            const std::int32_t v = triangles_(tested[k], c);
+            const auto [it, inserted] = local.emplace(v, std::int32_t(local.size()));
+            if (inserted) sub_vertices.row(it->second) = vertices.row(v);
+            sub_triangles(Eigen::Index(k), c) = it->second;
+        }
+    sub_vertices.conservativeResize(Eigen::Index(local.size()), 3);
+    const TriangleSelfIntersections found = triangle_self_intersections(sub_vertices, sub_triangles);
+
+    std::vector<char> is_changed(std::size_t(triangles_.rows()), 0);
+    for (const std::int64_t t : changed) is_changed[std::size_t(t)] = 1;
+    std::vector<std::pair<std::int64_t, std::int64_t>> kept;
+    for (const auto& pair : pairs_)
+        if (!is_changed[std::size_t(pair.first)] && !is_changed[std::size_t(pair.second)]) kept.push_back(pair);
+    for (const auto& [a, b] : found.pairs) {
+        const std::int64_t ta = tested[std::size_t(a)], tb = tested[std::size_t(b)];
+        if (is_changed[std::size_t(ta)] || is_changed[std::size_t(tb)]) kept.emplace_back(std::min(ta, tb), std::max(ta, tb));
+    }
+    std::sort(kept.begin(), kept.end());
+    pairs_.swap(kept);
+    for (const std::int64_t t : changed) degenerate_[std::size_t(t)] = 0;
+    for (const std::int64_t t : found.degenerate) degenerate_[std::size_t(tested[std::size_t(t)])] = 1;
+}
+
+MeshValidity IncrementalValidity::validity() const {
+    MeshValidity v;
+    v.faces = quads_.rows();
+    v.triangles = triangles_.rows();
+    v.intersecting_pairs = std::int64_t(pairs_.size());
+    std::vector<std::int64_t> involved;
+    for (const auto& [a, b] : pairs_) {
+        involved.push_back(a / 2);
+        involved.push_back(b / 2);
+    }
+    for (std::size_t t = 0; t < degenerate_.size(); ++t)
+        if (degenerate_[t]) {
+            ++v.degenerate_triangles;
+            involved.push_back(std::int64_t(t / 2));
+        }
+    sort_unique(involved);
+    v.intersecting_faces.assign(involved.begin(), involved.end());
+    for (std::size_t q = 0; q < folded_.size(); ++q)
+        if (folded_[q]) v.folded.push_back(std::int32_t(q));
+    v.folded_faces = std::int64_t(v.folded.size());
+    v.seconds = seconds_;
+    return v;
+}
+
+}  // namespace dsreg::validity_internal

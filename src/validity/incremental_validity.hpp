@@ -1,0 +1,41 @@
+// dsreg — validity of a quad mesh kept up to date while some of its vertices move (internal to
+// src/validity): after a move only the triangles of the moved vertices and the triangles near them
+// in space are tested again, instead of the whole mesh.
+#pragma once
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "dsreg/mesh.hpp"
+#include "dsreg/mesh_validity.hpp"
+
+namespace dsreg::validity_internal {
+
+class IncrementalValidity {
+public:
+    /// Checks the whole mesh (quads) once, with the field (one vector per quad).
+    IncrementalValidity(const PointMatrix& vertices, const FaceMatrix& quads, const PointMatrix& field);
+
+    /// The vertices in `moved` have new positions in `vertices`, and the quads in `refield` a new
+    /// field vector: tests again what they can have changed. Same result as check_mesh_validity
+    /// on the whole mesh.
+    void update(const PointMatrix& vertices, const std::vector<std::int32_t>& moved,
+                const std::vector<std::int32_t>& refield, const PointMatrix& field);
+
+    /// The current state as check_mesh_validity reports it (seconds: of all checks so far).
+    MeshValidity validity() const;
+
+private:
+    void retest(const PointMatrix& vertices, const std::vector<std::int32_t>& quads_to_test, const PointMatrix& field);
+
+    const FaceMatrix& quads_;
+    std::vector<std::vector<std::int32_t>> quads_of_vertex_;
+    FaceMatrix triangles_;  ///< 2q, 2q + 1: the shorter-diagonal split of quad q (current positions)
+    std::vector<std::pair<std::int64_t, std::int64_t>> pairs_;  ///< intersecting triangles, sorted
+    std::vector<char> degenerate_;                               ///< per triangle
+    std::vector<char> folded_;                                   ///< per quad
+    double seconds_ = 0;
+};
+
+}  // namespace dsreg::validity_internal

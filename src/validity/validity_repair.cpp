@@ -1,0 +1,499 @@
+// dsreg — repair of the regularized mesh until it is valid (include/dsreg/validity_repair.hpp):
+// a stronger data term on what is invalid, exact local solves of eq. (1).
+#include "dsreg/validity_repair.hpp"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include "dsreg/error.hpp"
+#include "incremental_validity.hpp"
+#include "dsreg/solvers.hpp"
+
+namespace dsreg {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using SparseMatrix = Eigen::SparseMatrix<double>;
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+double element_or_one(const Eigen::VectorXd& values, Eigen::Index i) { return values.size() ? values[i] : 1.0; }
+
+void check_inputs(const DigitalSurface& surface, const PointMatrix& normals, const PointMatrix& positions,
+                  const ValidityRepairOptions& o) {
+    if (normals.rows() != surface.face_count() || positions.rows() != surface.vertex_count())
+        throw Error("validity repair: " + std::to_string(normals.rows()) + " normals and " +
+                    std::to_string(positions.rows()) + " positions for " + std::to_string(surface.face_count()) +
+                    " faces and " + std::to_string(surface.vertex_count()) + " vertices");
+    const bool ok = o.alpha_start > 1 && o.alpha_step > 1 && o.alpha_cap >= o.alpha_start && std::isfinite(o.alpha_cap) &&
+                    o.alpha_grade > 1 && o.grade_rings >= 0 && o.region_rings >= o.grade_rings &&
+                    o.window_rings >= 0 && o.split_offset >= 0 && o.split_offset < 0.5 && o.field_margin >= 0 &&
+                    o.field_margin < 1 && o.max_rounds >= 0 &&
+                    (!o.clamp_half_width || (*o.clamp_half_width > o.split_offset && *o.clamp_half_width < 0.5));
+    if (!ok) throw Error("validity repair: invalid options");
+}
+
+/// Disjoint sets of vertices (the connected parts of the region).
+class Parts {
+public:
+    explicit Parts(std::size_t size) : parent_(size) { std::iota(parent_.begin(), parent_.end(), 0); }
+    std::int64_t find(std::int64_t x) {
+        while (parent_[std::size_t(x)] != x) x = parent_[std::size_t(x)] = parent_[std::size_t(parent_[std::size_t(x)])];
+        return x;
+    }
+    void unite(std::int64_t a, std::int64_t b) {
+        a = find(a), b = find(b);
+        if (a != b) parent_[std::size_t(std::max(a, b))] = std::min(a, b);
+    }
+
+private:
+    std::vector<std::int64_t> parent_;
+};
+
+std::vector<std::int32_t> unique_vertices_of(const FaceMatrix& quads, const std::vector<std::int32_t>& faces) {
+    std::vector<std::int32_t> vertices;
+    vertices.reserve(4 * faces.size());
+    for (const std::int32_t f : faces)
+        for (int k = 0; k < 4; ++k) vertices.push_back(quads(f, k));
+    std::sort(vertices.begin(), vertices.end());
+    vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+    return vertices;
+}
+
+/// Vertices within `rings` rings of `seeds` (seeds included) that pass `keep`, sorted.
+template <class Keep>
+std::vector<std::int32_t> rings_around(const VertexLinks& links, const std::vector<std::int32_t>& seeds, int rings,
+                                       std::vector<char>& mark, Keep keep) {
+    std::vector<std::int32_t> result, frontier;
+    for (const std::int32_t v : seeds)
+        if (!mark[std::size_t(v)]) mark[std::size_t(v)] = 1, frontier.push_back(v);
+    result = frontier;
+    for (int ring = 0; ring < rings; ++ring) {
+        std::vector<std::int32_t> next;
+        for (const std::int32_t v : frontier)
+            for (std::int64_t k = links.offsets[std::size_t(v)]; k < links.offsets[std::size_t(v) + 1]; ++k) {
+                const std::int32_t w = links.neighbors[std::size_t(k)];
+                if (mark[std::size_t(w)]) continue;
+                mark[std::size_t(w)] = 1;
+                next.push_back(w);
+            }
+        result.insert(result.end(), next.begin(), next.end());
+        frontier.swap(next);
+    }
+    for (const std::int32_t v : result) mark[std::size_t(v)] = 0;
+    result.erase(std::remove_if(result.begin(), result.end(), [&](std::int32_t v) { return !keep(v); }), result.end());
+    std::sort(result.begin(), result.end());
+    return result;
+}
+
+/// The state of a repair: the α factors m_i, the held vertices, the corrected field, the region
+/// and the current positions x. E' differs from E (assembled once, as R and b) by
+///   Σ_i (m_i − 1) α α_i w0_i |x_i − t_i|²  +  Σ_{corrected f} β β_f w2_f Σ_e [((x_a − x_b)·u'_f)² − ((x_a − x_b)·u_f)²],
+/// which the local solves add to the rows they solve for.
+class Repair {
+public:
+    Repair(const DigitalSurface& surface, const PointMatrix& normals, const RegularizationWeights& weights,
+           const PointMatrix& positions, const ValidityRepairOptions& options)
+        : surface_(surface), weights_(weights), o_(options), links_(vertex_links(surface.quads, surface.vertex_count())),
+          input_field_(normals), field_(normals), targets_(repair_targets(surface, options.split_offset)),
+          x_(flatten_points(positions)), factor_(std::size_t(surface.vertex_count()), 1.0),
+          held_(std::size_t(surface.vertex_count()), 0), in_region_(std::size_t(surface.vertex_count()), 0),
+          corrected_(std::size_t(surface.face_count()), 0), local_(std::size_t(surface.vertex_count()), -1),
+          mark_(std::size_t(surface.vertex_count()), 0) {
+        system_ = assemble_regularization_system(surface.vertices, surface.quads, links_, normals, weights);
+        faces_of_vertex_.assign(std::size_t(surface.vertex_count()), {});
+        for (std::int64_t f = 0; f < surface.face_count(); ++f)
+            for (int k = 0; k < 4; ++k) faces_of_vertex_[std::size_t(surface.quads(f, k))].push_back(std::int32_t(f));
+    }
+
+    /// One round on the invalid faces of `validity`: corrects the field, strengthens the data term,
+    /// grows the region and re-solves the free region vertices within `window_rings` of the
+    /// strengthened ones. `moved` and `refield` receive the vertices moved and the faces whose u
+    /// changed.
+    void round(const MeshValidity& validity, ValidityRepairReport& report, std::vector<std::int32_t>& moved,
+               std::vector<std::int32_t>& refield) {
+        const auto started = Clock::now();
+        moved_ = &moved;
+        refield = correct_field(validity.folded, report);
+        const std::vector<std::int32_t> invalid = unique_vertices_of(surface_.quads, validity.invalid_faces());
+        const std::vector<std::int32_t> strengthened = strengthen(invalid);
+        for (const std::int32_t v : rings_around(links_, strengthened, o_.region_rings, mark_, [](std::int32_t) { return true; }))
+            in_region_[std::size_t(v)] = 1;
+        solve(rings_around(links_, strengthened, o_.window_rings, mark_, [&](std::int32_t v) { return free_in_region(v); }),
+              report);
+        report.solve_seconds += seconds_since(started);
+    }
+
+    /// Solves the whole free region exactly (every part); `moved` receives the vertices moved.
+    void solve_region(ValidityRepairReport& report, std::vector<std::int32_t>& moved) {
+        const auto started = Clock::now();
+        moved_ = &moved;
+        std::vector<std::int32_t> region;
+        for (std::size_t i = 0; i < in_region_.size(); ++i)
+            if (free_in_region(std::int64_t(i))) region.push_back(std::int32_t(i));
+        solve(region, report);
+        report.solve_seconds += seconds_since(started);
+    }
+
+    /// Relative residual ‖A x − b‖ / ‖b‖ of E' on the free region (its stationarity; the KKT
+    /// residual of the box QP with the clamp boxes).
+    double region_residual() {
+        std::vector<std::int32_t> region;
+        for (std::size_t i = 0; i < in_region_.size(); ++i)
+            if (free_in_region(std::int64_t(i))) region.push_back(std::int32_t(i));
+        if (region.empty()) return 0;
+        for (std::size_t k = 0; k < region.size(); ++k) local_[std::size_t(region[k])] = std::int32_t(k);
+        SparseMatrix matrix;
+        Eigen::VectorXd b, x;
+        part_system(region, matrix, b);
+        gather(region, x);
+        double residual = 0;
+        if (o_.clamp_half_width) {
+            Eigen::VectorXd lower, upper;
+            clamp_bounds_of(region, lower, upper);
+            residual = box_qp_optimality(matrix, b, lower, upper, x, o_.qp.tolerance).kkt_residual;
+        } else {
+            residual = (matrix * x - b).norm() / std::max(b.norm(), 1e-300);
+        }
+        for (const std::int32_t v : region) local_[std::size_t(v)] = -1;
+        return residual;
+    }
+
+    PointMatrix positions() const { return unflatten_points(x_); }
+    /// Puts the positions back to `x` (a state of this repair); returns the vertices that change.
+    std::vector<std::int32_t> restore(const Eigen::VectorXd& x) {
+        std::vector<std::int32_t> changed;
+        for (Eigen::Index v = 0; v < x.size() / 3; ++v)
+            if (x.segment<3>(3 * v) != x_.segment<3>(3 * v)) changed.push_back(std::int32_t(v));
+        x_ = x;
+        return changed;
+    }
+    const Eigen::VectorXd& state() const { return x_; }
+    const PointMatrix& field() const { return field_; }
+    const VertexLinks& links() const { return links_; }
+
+    void finish(ValidityRepairResult& result) const {
+        result.alpha_factors.resize(surface_.vertex_count());
+        for (std::int64_t i = 0; i < surface_.vertex_count(); ++i) {
+            result.alpha_factors[i] = factor_[std::size_t(i)];
+            if (in_region_[std::size_t(i)]) result.region.push_back(std::int32_t(i));
+            if (held_[std::size_t(i)]) result.held.push_back(std::int32_t(i));
+            result.report.strengthened_vertices += factor_[std::size_t(i)] > 1 ? 1 : 0;
+        }
+        result.report.region_vertices = std::int64_t(result.region.size());
+        result.report.held_vertices = std::int64_t(result.held.size());
+        result.targets = targets_;
+    }
+
+private:
+    /// Replaces u on the folded faces whose u points into the object or along the face; returns them.
+    std::vector<std::int32_t> correct_field(const std::vector<std::int32_t>& folded, ValidityRepairReport& report) {
+        std::vector<std::int32_t> corrected;
+        for (const std::int32_t f : folded) {
+            const Eigen::Vector3d n = surface_.surfels[std::size_t(f)].trivial_normal();
+            const Eigen::Vector3d u = field_.row(f).transpose();
+            if (u.dot(n) >= o_.field_margin) continue;
+            field_.row(f) = lift_into_half_space(u, n, o_.field_margin).transpose();
+            corrected_[std::size_t(f)] = 1;
+            corrected.push_back(f);
+            ++report.field_corrections;
+        }
+        return corrected;
+    }
+
+    /// One step up for each invalid vertex: m_i × alpha_step (at least alpha_start), or held at
+    /// its target once m_i reached alpha_cap; the rings around get at least m / alpha_grade per
+    /// ring (grade_rings rings), so that the pulled vertices join the rest smoothly. Returns every
+    /// vertex whose factor or hold changed.
+    std::vector<std::int32_t> strengthen(const std::vector<std::int32_t>& invalid) {
+        std::vector<std::int32_t> changed;
+        for (const std::int32_t v : invalid) {
+            double& m = factor_[std::size_t(v)];
+            changed.push_back(v);
+            if (m < o_.alpha_cap) {
+                m = std::max(m * o_.alpha_step, o_.alpha_start);
+            } else if (!held_[std::size_t(v)]) {
+                held_[std::size_t(v)] = 1;
+                x_.segment<3>(3 * Eigen::Index(v)) = targets_.row(v).transpose();
+                moved_->push_back(v);
+            }
+        }
+        std::vector<std::int32_t> frontier = invalid;
+        for (int ring = 0; ring < o_.grade_rings; ++ring) {
+            std::vector<std::int32_t> next;
+            for (const std::int32_t v : frontier)
+                for (std::int64_t k = links_.offsets[std::size_t(v)]; k < links_.offsets[std::size_t(v) + 1]; ++k) {
+                    const std::int32_t w = links_.neighbors[std::size_t(k)];
+                    const double graded = factor_[std::size_t(v)] / o_.alpha_grade;
+                    if (graded <= std::max(factor_[std::size_t(w)], 1.0)) continue;
+                    factor_[std::size_t(w)] = graded;
+                    next.push_back(w);
+                }
+            changed.insert(changed.end(), next.begin(), next.end());
+            frontier.swap(next);
+        }
+        std::sort(changed.begin(), changed.end());
+        changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
+        return changed;
+    }
+
+    bool free_in_region(std::int64_t v) const { return in_region_[std::size_t(v)] && !held_[std::size_t(v)]; }
+
+    /// Minimizes E' over `vertices` (sorted, free region vertices), every other vertex held:
+    /// each connected part (under the coupling of R) on its own.
+    void solve(const std::vector<std::int32_t>& vertices, ValidityRepairReport& report) {
+        const SparseMatrix& R = system_.matrix;
+        for (const std::int32_t v : vertices) mark_[std::size_t(v)] = 1;
+        Parts parts(mark_.size());
+        for (const std::int32_t v : vertices)
+            for (SparseMatrix::InnerIterator it(R, 3 * Eigen::Index(v)); it; ++it)
+                if (mark_[std::size_t(it.row() / 3)]) parts.unite(v, it.row() / 3);
+        std::vector<std::int64_t> index_of_root(mark_.size(), -1);
+        std::vector<std::vector<std::int32_t>> groups;
+        for (const std::int32_t v : vertices) {
+            std::int64_t& index = index_of_root[std::size_t(parts.find(v))];
+            if (index < 0) index = std::int64_t(groups.size()), groups.emplace_back();
+            groups[std::size_t(index)].push_back(v);
+        }
+        for (const std::int32_t v : vertices) mark_[std::size_t(v)] = 0;
+        for (const std::vector<std::int32_t>& part : groups) {
+            solve_part(part, report);
+            ++report.parts_solved;
+        }
+    }
+
+    /// Adds block `M` at (row vertex r, column vertex c) of E' restricted to the part: into the
+    /// part's matrix if c is in the part, else times x_c into the right-hand side.
+    void add_block(std::int32_t r, std::int32_t c, const Eigen::Matrix3d& M, std::vector<Eigen::Triplet<double>>& entries,
+                   Eigen::VectorXd& b) const {
+        const std::int32_t lr = local_[std::size_t(r)], lc = local_[std::size_t(c)];
+        if (lr < 0) return;
+        if (lc >= 0) {
+            for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j) entries.emplace_back(3 * Eigen::Index(lr) + i, 3 * Eigen::Index(lc) + j, M(i, j));
+        } else {
+            b.segment<3>(3 * Eigen::Index(lr)) -= M * x_.segment<3>(3 * Eigen::Index(c));
+        }
+    }
+
+    /// The rows of E' for the part (local_ set): R_PP x_P = b_P − R_P,rest x_rest (R symmetric:
+    /// column c of R gives row c), plus the repair's terms.
+    void part_system(const std::vector<std::int32_t>& part, SparseMatrix& matrix, Eigen::VectorXd& b) const {
+        const SparseMatrix& R = system_.matrix;
+        const Eigen::Index n = 3 * Eigen::Index(part.size());
+        std::vector<Eigen::Triplet<double>> entries;
+        b.resize(n);
+        for (std::size_t k = 0; k < part.size(); ++k) {
+            const std::int32_t v = part[k];
+            for (int d = 0; d < 3; ++d) {
+                const Eigen::Index column = 3 * Eigen::Index(v) + d, c = 3 * Eigen::Index(k) + d;
+                b[c] = system_.rhs[column];
+                for (SparseMatrix::InnerIterator it(R, column); it; ++it) {
+                    const std::int32_t row_local = local_[std::size_t(it.row() / 3)];
+                    if (row_local >= 0)
+                        entries.emplace_back(3 * Eigen::Index(row_local) + it.row() % 3, c, it.value());
+                    else
+                        b[c] -= it.value() * x_[it.row()];
+                }
+            }
+            // Stronger data term (m − 1) α α_i w0_i |x_i − t_i|².
+            const double extra = (factor_[std::size_t(v)] - 1) * weights_.alpha * element_or_one(weights_.vertex_alpha, v) *
+                                 element_or_one(weights_.vertex_weights, v);
+            if (extra > 0) {
+                for (int d = 0; d < 3; ++d) entries.emplace_back(3 * Eigen::Index(k) + d, 3 * Eigen::Index(k) + d, extra);
+                b.segment<3>(3 * Eigen::Index(k)) += extra * targets_.row(v).transpose();
+            }
+        }
+        // Corrected faces: their alignment blocks with u' instead of u (eq. 5–10).
+        std::vector<std::int32_t> faces;
+        for (const std::int32_t v : part)
+            for (const std::int32_t f : faces_of_vertex_[std::size_t(v)])
+                if (corrected_[std::size_t(f)]) faces.push_back(f);
+        std::sort(faces.begin(), faces.end());
+        faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+        for (const std::int32_t f : faces) {
+            const Eigen::Vector3d u = field_.row(f).transpose(), u0 = input_field_.row(f).transpose();
+            const double weight = weights_.beta * element_or_one(weights_.face_beta, f) * element_or_one(weights_.face_weights, f);
+            const Eigen::Matrix3d M = weight * (u * u.transpose() - u0 * u0.transpose());
+            for (int e = 0; e < 4; ++e) {
+                const std::int32_t a = surface_.quads(f, e), c = surface_.quads(f, (e + 1) % 4);
+                add_block(a, a, M, entries, b);
+                add_block(c, c, M, entries, b);
+                add_block(a, c, -M, entries, b);
+                add_block(c, a, -M, entries, b);
+            }
+        }
+        matrix.resize(n, n);
+        matrix.setFromTriplets(entries.begin(), entries.end());
+    }
+
+    void gather(const std::vector<std::int32_t>& part, Eigen::VectorXd& x) const {
+        x.resize(3 * Eigen::Index(part.size()));
+        for (std::size_t k = 0; k < part.size(); ++k) x.segment<3>(3 * Eigen::Index(k)) = x_.segment<3>(3 * Eigen::Index(part[k]));
+    }
+
+    void clamp_bounds_of(const std::vector<std::int32_t>& part, Eigen::VectorXd& lower, Eigen::VectorXd& upper) const {
+        lower.resize(3 * Eigen::Index(part.size()));
+        upper.resize(lower.size());
+        for (std::size_t k = 0; k < part.size(); ++k)
+            for (int d = 0; d < 3; ++d) {
+                const double reach = *o_.clamp_half_width * surface_.grid.spacing[d];
+                lower[3 * Eigen::Index(k) + d] = surface_.vertices(part[k], d) - reach;
+                upper[3 * Eigen::Index(k) + d] = surface_.vertices(part[k], d) + reach;
+            }
+    }
+
+    /// min E' over the part, the rest held (sparse Cholesky; the box QP with the clamp boxes).
+    void solve_part(const std::vector<std::int32_t>& part, ValidityRepairReport& report) {
+        for (std::size_t k = 0; k < part.size(); ++k) local_[std::size_t(part[k])] = std::int32_t(k);
+        SparseMatrix matrix;
+        Eigen::VectorXd b, x;
+        part_system(part, matrix, b);
+        gather(part, x);
+        if (o_.clamp_half_width) {
+            Eigen::VectorXd lower, upper, unconstrained;
+            clamp_bounds_of(part, lower, upper);
+            report.converged = solve_box_qp_from_unconstrained(matrix, b, lower, upper, unconstrained, x, o_.qp).converged &&
+                               report.converged;
+        } else {
+            SolverOptions solver;
+            solver.kind = SolverKind::Cholmod;
+            solve_spd(matrix, b, x, solver);
+        }
+        for (std::size_t k = 0; k < part.size(); ++k) {
+            auto position = x_.segment<3>(3 * Eigen::Index(part[k]));
+            if (position != x.segment<3>(3 * Eigen::Index(k))) moved_->push_back(part[k]);
+            position = x.segment<3>(3 * Eigen::Index(k));
+            local_[std::size_t(part[k])] = -1;
+        }
+    }
+
+    const DigitalSurface& surface_;
+    const RegularizationWeights& weights_;
+    ValidityRepairOptions o_;
+    VertexLinks links_;
+    PointMatrix input_field_, field_;
+    PointMatrix targets_;
+    Eigen::VectorXd x_;
+    RegularizationSystem system_;
+    std::vector<std::vector<std::int32_t>> faces_of_vertex_;
+    std::vector<double> factor_;  ///< m_i
+    std::vector<char> held_;
+    std::vector<char> in_region_;
+    std::vector<char> corrected_;      ///< faces whose u was replaced
+    std::vector<std::int32_t> local_;  ///< index in the part being solved, −1 elsewhere
+    std::vector<char> mark_;           ///< scratch, all 0 between calls
+    std::vector<std::int32_t>* moved_ = nullptr;
+};
+
+}  // namespace
+
+Eigen::Vector3d lift_into_half_space(const Eigen::Vector3d& u, const Eigen::Vector3d& n, double margin) {
+    const double along = u.dot(n);
+    if (along >= margin) return u;
+    const Eigen::Vector3d tangential = u - along * n;
+    const double length = tangential.norm();
+    if (!(length > 1e-12)) return n;
+    return std::sqrt(1 - margin * margin) * tangential / length + margin * n;
+}
+
+PointMatrix repair_targets(const DigitalSurface& surface, double split_offset) {
+    const std::int64_t n = surface.vertex_count();
+    // Vertices sorted by pointel: runs of more than one are the copies of a split pointel.
+    const auto pointel = [&](std::int64_t i) {
+        return std::array<std::int32_t, 3>{surface.vertex_pointels(i, 0), surface.vertex_pointels(i, 1),
+                                           surface.vertex_pointels(i, 2)};
+    };
+    std::vector<std::int64_t> order(static_cast<std::size_t>(n));
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](std::int64_t a, std::int64_t b) { return pointel(a) < pointel(b); });
+    std::vector<char> split(std::size_t(n), 0);
+    for (std::size_t k = 0; k + 1 < order.size(); ++k)
+        if (pointel(order[k]) == pointel(order[k + 1])) split[std::size_t(order[k])] = split[std::size_t(order[k + 1])] = 1;
+
+    // Each copy moves towards the mean of the centroids of its faces, measured in voxels.
+    PointMatrix towards = PointMatrix::Zero(n, 3);
+    for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+        Eigen::RowVector3d centroid = Eigen::RowVector3d::Zero();
+        for (int k = 0; k < 4; ++k) centroid += surface.vertices.row(surface.quads(f, k));
+        centroid /= 4.0;
+        for (int k = 0; k < 4; ++k) {
+            const std::int32_t v = surface.quads(f, k);
+            if (split[std::size_t(v)]) towards.row(v) += centroid - surface.vertices.row(v);
+        }
+    }
+    const Eigen::Array3d spacing = surface.grid.spacing.array();
+    PointMatrix targets = surface.vertices;
+    for (std::int64_t i = 0; i < n; ++i) {
+        if (!split[std::size_t(i)]) continue;
+        const Eigen::Array3d in_voxels = towards.row(i).transpose().array() / spacing;
+        const double length = in_voxels.matrix().norm();
+        if (length > 0) targets.row(i) += (split_offset / length * in_voxels * spacing).matrix().transpose();
+    }
+    return targets;
+}
+
+ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointMatrix& normals,
+                                     const RegularizationWeights& weights, const PointMatrix& positions,
+                                     const ValidityRepairOptions& options, const ProgressCallback& progress) {
+    check_inputs(surface, normals, positions, options);
+    ValidityRepairResult result;
+    ValidityRepairReport& report = result.report;
+    validity_internal::IncrementalValidity tracker(positions, surface.quads, normals);
+    report.before = report.after = tracker.validity();
+    result.positions = positions;
+    result.normals = normals;
+    result.alpha_factors = Eigen::VectorXd::Ones(surface.vertex_count());
+    const VertexLinks links = vertex_links(surface.quads, surface.vertex_count());
+    report.energy_before = regularization_energy(positions, surface.vertices, surface.quads, links, normals, weights);
+    report.energy_after = report.energy_before;
+    report.check_seconds = report.before.seconds;
+    if (report.before.valid() || options.max_rounds == 0) return result;
+
+    // Rounds on windows around what is invalid, then one exact solve of the whole region; again
+    // if that solve undid the repair somewhere.
+    Repair repair(surface, normals, weights, positions, options);
+    MeshValidity& validity = report.after;
+    const auto update = [&](const std::vector<std::int32_t>& moved, const std::vector<std::int32_t>& refield) {
+        tracker.update(repair.positions(), moved, refield, repair.field());
+        validity = tracker.validity();
+    };
+    Eigen::VectorXd last_valid;
+    for (int exact_solves = 0; exact_solves < 3 && !validity.valid() && report.rounds < options.max_rounds; ++exact_solves) {
+        while (!validity.valid() && report.rounds < options.max_rounds) {
+            report_progress(progress, "repair", -1,
+                            "round " + std::to_string(report.rounds + 1) + ": " +
+                                std::to_string(validity.intersecting_pairs) + " intersecting pairs, " +
+                                std::to_string(validity.folded_faces) + " folded faces");
+            std::vector<std::int32_t> moved, refield;
+            repair.round(validity, report, moved, refield);
+            ++report.rounds;
+            update(moved, refield);
+        }
+        if (!validity.valid()) break;
+        last_valid = repair.state();
+        std::vector<std::int32_t> moved;
+        repair.solve_region(report, moved);
+        update(moved, {});
+        report.exact = validity.valid();
+    }
+    if (!validity.valid() && last_valid.size() > 0) update(repair.restore(last_valid), {});  // valid, not exact
+    report.max_kkt_residual = repair.region_residual();
+    report.check_seconds = validity.seconds;
+    repair.finish(result);
+    result.positions = repair.positions();
+    result.normals = repair.field();
+    report.energy_after = regularization_energy(result.positions, surface.vertices, surface.quads, links, normals, weights);
+    report.max_displacement_voxels =
+        (result.positions - positions).rowwise().norm().maxCoeff() / surface.grid.spacing.minCoeff();
+    return result;
+}
+
+}  // namespace dsreg

@@ -1,0 +1,298 @@
+// The repair of the regularized mesh (validity_repair.hpp): its targets are valid, a constructed
+// fold comes out valid, the result is the exact minimizer of the repaired energy over the region
+// and nothing else moves, the repair stops as soon as the mesh is valid; noisy random blobs, the
+// reversible mode and the real volumes of ../shared/data come out valid.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <filesystem>
+#include <random>
+
+#include "dsreg/clamped_regularization.hpp"
+#include "dsreg/digital_surface.hpp"
+#include "dsreg/error.hpp"
+#include "dsreg/mesh_validity.hpp"
+#include "dsreg/normals.hpp"
+#include "dsreg/pipeline.hpp"
+#include "dsreg/regularization.hpp"
+#include "dsreg/validity_repair.hpp"
+#include "test_support.hpp"
+
+#ifndef DSREG_SHARED_DATA_DIR
+#define DSREG_SHARED_DATA_DIR "../shared/data"
+#endif
+
+namespace dsreg {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+SolverOptions cholmod() {
+    SolverOptions solver;
+    solver.kind = SolverKind::Cholmod;
+    return solver;
+}
+
+/// A digital ball of radius 9 (centre z = 10.5) whose field is tilted by 60° on the cap z > 17 (a
+/// wrong field, as on a part thinner than the integral-invariant ball): the solve folds the cap.
+struct TiltedCap {
+    BinaryVolume volume = test::make_ball(22, 9, 10.5);
+    DigitalSurface surface = extract_digital_surface(volume, Connectivity::TwentySix);
+    PointMatrix field;
+    RegularizationResult solved;
+
+    TiltedCap() {
+        field = integral_invariant_normals(volume, surface, 3.0);
+        const PointMatrix centres = surfel_centers(surface);
+        for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+            if (centres(f, 2) <= 17) continue;
+            const Eigen::Vector3d n = field.row(f).transpose();
+            const Eigen::Vector3d axis = n.cross(Eigen::Vector3d::UnitX()).normalized();
+            field.row(f) = (Eigen::AngleAxisd(kPi / 3, axis) * n).transpose();
+        }
+        solved = regularize(surface, field, RegularizationWeights{}, cholmod());
+    }
+};
+
+const TiltedCap& tilted_cap() {
+    static const TiltedCap c;
+    return c;
+}
+
+const ValidityRepairResult& tilted_cap_repair() {
+    static const ValidityRepairResult r =
+        repair_validity(tilted_cap().surface, tilted_cap().field, RegularizationWeights{}, tilted_cap().solved.positions);
+    return r;
+}
+
+/// A blob: the union of a few random balls in a 24³ grid, each surface voxel flipped with
+/// probability 0.15 (noise).
+BinaryVolume noisy_blob(unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> centre(7, 16), radius(3, 6);
+    std::vector<Eigen::Vector4d> balls;
+    for (int b = 0; b < 4; ++b) balls.emplace_back(centre(rng), centre(rng), centre(rng), radius(rng));
+    const auto inside = [&](double x, double y, double z) {
+        for (const Eigen::Vector4d& ball : balls)
+            if (Eigen::Vector3d(x - ball[0], y - ball[1], z - ball[2]).norm() <= ball[3]) return true;
+        return false;
+    };
+    BinaryVolume volume = test::make_volume({24, 24, 24}, inside);
+    std::bernoulli_distribution flip(0.15);
+    BinaryVolume noisy = volume;
+    for (std::int64_t k = 1; k + 1 < 24; ++k)
+        for (std::int64_t j = 1; j + 1 < 24; ++j)
+            for (std::int64_t i = 1; i + 1 < 24; ++i) {
+                bool boundary = false;
+                for (int d = 0; d < 3; ++d)
+                    for (int s : {-1, 1}) {
+                        std::int64_t n[3] = {i, j, k};
+                        n[d] += s;
+                        boundary = boundary || volume.inside(n[0], n[1], n[2]) != volume.inside(i, j, k);
+                    }
+                if (boundary && flip(rng)) {
+                    auto& voxel = noisy.mask[std::size_t(noisy.grid.linear_index(i, j, k))];
+                    voxel = voxel ? 0 : 1;
+                }
+            }
+    return noisy;
+}
+
+TEST(ValidityRepair, TargetsAreAValidMeshOnRandomVolumes) {
+    // The digital surface itself touches itself at every split pointel; the targets pull the copies
+    // apart and are valid, for both connectivities.
+    int with_split_pointels = 0;
+    for (unsigned seed = 0; seed < 24; ++seed) {
+        std::mt19937 rng(seed);
+        std::bernoulli_distribution coin(0.3 + 0.02 * seed);
+        const BinaryVolume volume = test::make_volume({8, 8, 7}, [&](double, double, double) { return coin(rng); });
+        for (Connectivity c : {Connectivity::Six, Connectivity::TwentySix}) {
+            const DigitalSurface s = extract_digital_surface(volume, c);
+            SCOPED_TRACE("seed " + std::to_string(seed) + ", connectivity " + std::to_string(int(c)));
+            if (s.split_pointel_count > 0) {
+                ++with_split_pointels;
+                EXPECT_FALSE(check_mesh_validity(s.vertices, s.quads, trivial_normals(s)).valid());
+            }
+            const MeshValidity v = check_mesh_validity(repair_targets(s, 0.1), s.quads, trivial_normals(s));
+            EXPECT_TRUE(v.valid()) << v.intersecting_pairs << " pairs, " << v.folded_faces << " folded";
+        }
+    }
+    EXPECT_GT(with_split_pointels, 20);
+}
+
+TEST(ValidityRepair, LiftIntoHalfSpace) {
+    const Eigen::Vector3d n = Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d good(0.6, 0, 0.8);
+    EXPECT_EQ(lift_into_half_space(good, n, 0.2), good);
+    const Eigen::Vector3d lifted = lift_into_half_space(Eigen::Vector3d(0.6, 0, -0.8), n, 0.2);
+    EXPECT_NEAR(lifted.norm(), 1.0, 1e-15);
+    EXPECT_NEAR(lifted.dot(n), 0.2, 1e-15);
+    EXPECT_NEAR(lifted.y(), 0.0, 1e-15);  // same tangential direction (+x)
+    EXPECT_GT(lifted.x(), 0.0);
+    EXPECT_EQ(lift_into_half_space(-n, n, 0.2), n);
+}
+
+TEST(ValidityRepair, AConstructedFoldComesOutValid) {
+    const TiltedCap& c = tilted_cap();
+    const ValidityRepairResult& r = tilted_cap_repair();
+    ASSERT_EQ(c.surface.split_pointel_count, 0);  // targets = digital positions below
+    EXPECT_GT(r.report.before.intersecting_pairs, 0);
+    EXPECT_GT(r.report.before.folded_faces, 0);
+    EXPECT_TRUE(r.report.after.valid());
+    EXPECT_TRUE(check_mesh_validity(r.positions, c.surface.quads, r.normals).valid());
+    EXPECT_GT(r.report.rounds, 0);
+    // Local: the lower third of the ball (z < 8; the cap is z > 17) is not touched.
+    EXPECT_LT(r.report.region_vertices, c.surface.vertex_count());
+    for (std::int64_t v = 0; v < c.surface.vertex_count(); ++v)
+        if (c.surface.vertices(v, 2) < 8) EXPECT_EQ(r.positions.row(v), c.solved.positions.row(v)) << "vertex " << v;
+}
+
+TEST(ValidityRepair, TheResultMinimizesTheRepairedEnergyOverTheRegionAndNothingElseMoves) {
+    const TiltedCap& c = tilted_cap();
+    const ValidityRepairResult& r = tilted_cap_repair();
+    ASSERT_TRUE(r.report.exact);
+    // E' = E with α_i × m_i and the corrected field (targets = p here): its gradient vanishes on
+    // every free vertex of the region (the KKT conditions of min E' over the region, the rest held).
+    RegularizationWeights repaired;
+    repaired.vertex_alpha = r.alpha_factors;
+    const VertexLinks links = vertex_links(c.surface.quads, c.surface.vertex_count());
+    const RegularizationSystem system =
+        assemble_regularization_system(c.surface.vertices, c.surface.quads, links, r.normals, repaired);
+    const Eigen::VectorXd gradient = system.matrix * flatten_points(r.positions) - system.rhs;
+    std::vector<char> in_region(std::size_t(c.surface.vertex_count()), 0), held(in_region.size(), 0);
+    for (const std::int32_t v : r.region) in_region[std::size_t(v)] = 1;
+    for (const std::int32_t v : r.held) held[std::size_t(v)] = 1;
+    double worst = 0;
+    for (std::int64_t v = 0; v < c.surface.vertex_count(); ++v) {
+        if (in_region[std::size_t(v)] && !held[std::size_t(v)])
+            worst = std::max(worst, gradient.segment<3>(3 * v).norm());
+        if (!in_region[std::size_t(v)]) EXPECT_EQ(r.positions.row(v), c.solved.positions.row(v)) << "vertex " << v;
+        if (held[std::size_t(v)]) EXPECT_EQ(r.positions.row(v), r.targets.row(v));
+    }
+    EXPECT_LT(worst, 1e-9 * system.rhs.norm());
+    EXPECT_LT(r.report.max_kkt_residual, 1e-9);
+    // The field changes only on faces it corrected, each to u·n_s = field_margin.
+    for (std::int64_t f = 0; f < c.surface.face_count(); ++f) {
+        if (r.normals.row(f) == c.field.row(f)) continue;
+        EXPECT_NEAR(r.normals.row(f).dot(c.surface.surfels[std::size_t(f)].trivial_normal().transpose()), 0.2, 1e-12);
+    }
+}
+
+TEST(ValidityRepair, TheEnergyRisesOnlyAsMuchAsTheRepairNeeds) {
+    const TiltedCap& c = tilted_cap();
+    const ValidityRepairResult& r = tilted_cap_repair();
+    const RegularizationWeights w;
+    // p* is the unconstrained optimum: the repair can only raise E, and it says by how much.
+    EXPECT_DOUBLE_EQ(r.report.energy_before.total(w), c.solved.energy_after.total(w));
+    EXPECT_GT(r.report.energy_after.total(w), r.report.energy_before.total(w));
+    // It stops as soon as it can: with one round less the mesh is not yet valid as the exact
+    // minimizer of E' (invalid, or valid only before that last solve undid part of it).
+    ValidityRepairOptions fewer;
+    fewer.max_rounds = r.report.rounds - 1;
+    const ValidityRepairResult short_of_it = repair_validity(c.surface, c.field, w, c.solved.positions, fewer);
+    EXPECT_FALSE(short_of_it.report.after.valid() && short_of_it.report.exact);
+    // Pulling every vertex as hard as the repair pulled its strongest one costs more.
+    RegularizationWeights everywhere;
+    everywhere.vertex_alpha = Eigen::VectorXd::Constant(c.surface.vertex_count(), r.alpha_factors.maxCoeff());
+    const RegularizationResult blunt = regularize(c.surface, c.field, everywhere, cholmod());
+    const VertexLinks links = vertex_links(c.surface.quads, c.surface.vertex_count());
+    const double blunt_energy =
+        regularization_energy(blunt.positions, c.surface.vertices, c.surface.quads, links, c.field, w).total(w);
+    EXPECT_LT(r.report.energy_after.total(w), blunt_energy);
+}
+
+TEST(ValidityRepair, AValidMeshIsLeftAlone) {
+    const BinaryVolume ball = test::make_ball(16, 6, 7.5);
+    const DigitalSurface s = extract_digital_surface(ball, Connectivity::TwentySix);
+    const PointMatrix u = integral_invariant_normals(ball, s, 3.0);
+    const RegularizationResult solved = regularize(s, u, RegularizationWeights{}, cholmod());
+    const ValidityRepairResult r = repair_validity(s, u, RegularizationWeights{}, solved.positions);
+    ASSERT_TRUE(r.report.before.valid());
+    EXPECT_EQ(r.report.rounds, 0);
+    EXPECT_EQ(r.positions, solved.positions);
+    EXPECT_EQ(r.normals, u);
+    EXPECT_DOUBLE_EQ(r.report.energy_after.total(RegularizationWeights{}), solved.energy_after.total(RegularizationWeights{}));
+}
+
+TEST(ValidityRepair, NoisyRandomBlobsComeOutValid) {
+    int invalid_before = 0;
+    for (unsigned seed = 0; seed < 4; ++seed)
+        for (Connectivity connectivity : {Connectivity::Six, Connectivity::TwentySix}) {
+            LoadedVolume loaded;
+            loaded.volume = noisy_blob(seed);
+            loaded.description = "blob";
+            PipelineOptions options;  // defaults: II normals, paper weights, repair
+            options.connectivity = connectivity;
+            const PipelineResult result = run_pipeline(loaded, options);
+            SCOPED_TRACE("seed " + std::to_string(seed) + ", connectivity " + std::to_string(int(connectivity)));
+            ASSERT_TRUE(result.validity.has_value());
+            invalid_before += result.validity->before.valid() ? 0 : 1;
+            EXPECT_TRUE(result.validity->after.valid());
+            const MeshValidity v = check_mesh_validity(result.regularization.positions, result.surface.quads, result.field.normals);
+            EXPECT_EQ(v.intersecting_pairs, 0);
+            EXPECT_EQ(v.folded_faces, 0);
+            EXPECT_EQ(v.degenerate_triangles, 0);
+        }
+    EXPECT_GT(invalid_before, 0);  // the noise does make the solve fold
+}
+
+TEST(ValidityRepair, TheReversibleModeStaysReversible) {
+    // A random field makes the clamped solve fold; the repair keeps every vertex in its clamp box,
+    // so the mesh still re-digitizes to the input.
+    std::mt19937 rng(5);
+    std::bernoulli_distribution coin(0.45);
+    const BinaryVolume volume = test::make_volume({9, 9, 9}, [&](double, double, double) { return coin(rng); });
+    const DigitalSurface s = extract_digital_surface(volume, Connectivity::TwentySix);
+    std::normal_distribution<double> normal(0, 1);
+    PointMatrix u(s.face_count(), 3);
+    for (std::int64_t f = 0; f < s.face_count(); ++f) u.row(f) = Eigen::RowVector3d(normal(rng), normal(rng), normal(rng)).normalized();
+    const ClampedRegularizationResult clamped = regularize_clamped(s, u, RegularizationWeights{});
+    ValidityRepairOptions options;
+    options.clamp_half_width = 0.499;
+    const ValidityRepairResult r = repair_validity(s, u, RegularizationWeights{}, clamped.positions, options);
+    EXPECT_FALSE(r.report.before.valid());
+    EXPECT_TRUE(r.report.after.valid());
+    EXPECT_TRUE(r.report.converged);
+    Eigen::VectorXd lower, upper;
+    clamp_bounds(s, 0.499, lower, upper);
+    const Eigen::VectorXd x = flatten_points(r.positions);
+    EXPECT_TRUE((x.array() >= lower.array()).all() && (x.array() <= upper.array()).all());
+    EXPECT_EQ(classify_voxel_centres(volume, r.positions, s.quads).wrong(), 0);
+}
+
+TEST(ValidityRepair, RejectsInconsistentInput) {
+    const TiltedCap& c = tilted_cap();
+    EXPECT_THROW(repair_validity(c.surface, PointMatrix(3, 3), RegularizationWeights{}, c.solved.positions), Error);
+    ValidityRepairOptions bad;
+    bad.alpha_step = 1;
+    EXPECT_THROW(repair_validity(c.surface, c.field, RegularizationWeights{}, c.solved.positions, bad), Error);
+}
+
+// The real volumes of ../shared/data with the default pipeline: the mesh users get is valid.
+class RealVolume : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(RealVolume, ComesOutValid) {
+    const std::string path = std::string(DSREG_SHARED_DATA_DIR) + "/" + GetParam();
+    if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " not present";
+    VolumeSource source;
+    source.input_path = path;
+    const PipelineResult result = run_pipeline(source, PipelineOptions{});
+    ASSERT_TRUE(result.validity.has_value());
+    const MeshValidity v = check_mesh_validity(result.regularization.positions, result.surface.quads, result.field.normals);
+    EXPECT_EQ(v.intersecting_pairs, 0) << GetParam();
+    EXPECT_EQ(v.degenerate_triangles, 0) << GetParam();
+    EXPECT_EQ(v.folded_faces, 0) << GetParam();
+}
+
+INSTANTIATE_TEST_SUITE_P(SharedData, RealVolume,
+                         ::testing::Values("cat10.vol", "bunny-64.vol", "Al.100.vol", "bunny-128.vol", "lobster.vol"),
+                         [](const ::testing::TestParamInfo<std::string>& info) {
+                             std::string name = info.param.substr(0, info.param.find(".vol"));
+                             for (char& ch : name)
+                                 if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+                             return name;
+                         });
+
+}  // namespace
+}  // namespace dsreg
