@@ -36,6 +36,14 @@ void add_volume_source_options(CLI::App& command, VolumeSource& o, CliFlags& fla
         ->expected(3)
         ->delimiter(',');
     command.add_option("--max-voxels", o.max_voxels, "Refuse volumes with more voxels than this")->capture_default_str();
+    command.add_flag("--multi-label", o.multi_label,
+                     "The input is a label map: every non-zero value is a label, and every interface between two "
+                     "labels (or a label and the background) is regularized at once, shared by both; writes -o with "
+                     "every interface face once and OUT-<label>.EXT, the closed surface of each label "
+                     "(docs/multi-label.md)");
+    command.add_option("--labels", o.labels,
+                       "With --multi-label (implied): keep these labels, e.g. 1,4,7; the other voxels join the background")
+        ->delimiter(',');
     command.add_option("--max-memory", o.max_memory,
                        "Refuse runs whose estimated peak memory exceeds this, e.g. 4G, 512M (K/M/G/T: powers of 1024)");
 }
@@ -156,6 +164,7 @@ ProgressCallback stage_lines(bool shown) {
 void run(RegularizeCommand& c) {
     apply_flags(c);
     check_pipeline_options(c.options, !c.source.shape.empty());
+    check_multi_label_options(c.source, c.options);
     check_pipeline_outputs(c.outputs);
     const ProgressCallback progress = stage_lines(!c.flags.quiet && (c.flags.verbose || isatty(STDERR_FILENO)));
     PipelineResult result = run_pipeline(c.source, c.options, progress);

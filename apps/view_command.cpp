@@ -29,7 +29,15 @@ std::string attributes_line(const PolygonMesh& mesh) {
     const auto add = [&](const std::string& item) { text += (text.empty() ? "" : ", ") + item; };
     if (mesh.face_normals.rows() > 0) add("normal field u per face");
     for (const auto& [name, values] : mesh.vertex_scalars) add(name == "v" ? "feature map v" : name + " per vertex");
+    for (const auto& [name, values] : mesh.face_integers) add(name + " per face");
     return text.empty() ? "none" : text;
+}
+
+/// The face integers called `name`, or null.
+const Eigen::VectorXi* face_integers(const PolygonMesh& mesh, const std::string& name) {
+    for (const auto& [key, values] : mesh.face_integers)
+        if (key == name) return &values;
+    return nullptr;
 }
 
 ViewLayer read_layer(const std::string& path) {
@@ -37,6 +45,15 @@ ViewLayer read_layer(const std::string& path) {
     layer.name = std::filesystem::path(path).filename().string();
     layer.mesh = read_mesh(path);
     layer.summary = {{"file", path}, {"attributes", attributes_line(layer.mesh)}};
+    // A label complex written by regularize --multi-label (PLY face properties, VTK cell data):
+    // each face seen from its front shows its inner label, from behind its outer label.
+    const Eigen::VectorXi* inner = face_integers(layer.mesh, "inner_label");
+    const Eigen::VectorXi* outer = face_integers(layer.mesh, "outer_label");
+    if (inner != nullptr && outer != nullptr) {
+        layer.face_labels.resize(inner->size(), 2);
+        layer.face_labels.col(0) = *inner;
+        layer.face_labels.col(1) = *outer;
+    }
     return layer;
 }
 

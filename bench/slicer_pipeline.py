@@ -12,6 +12,11 @@ output lands on dsreg's meshes of the same volume (spacing 1, origin 0 for .vol 
 
   bench/slicer_pipeline.py INPUT -o OUT.{ply,obj,stl,vtk} [--min A] [--max B] [--smoothing 0.5]
                            [--raw-dims X,Y,Z --raw-type uint8] [--spacing SX,SY,SZ] [--json T.json]
+                           [--each-label]
+
+--each-label: a label map, as Slicer converts a segmentation: each non-zero value is a segment,
+cropped to its extent and converted on its own (the steps above), written to OUT-<value>.EXT;
+the timings are summed over the segments.
 
 INPUT: DGtal .vol (versions 2 and 3), .longvol, a .raw volume (with --raw-dims), NumPy .npy
 (indexed [i, j, k]) or NIfTI (.nii, .nii.gz, through nibabel; its voxel grid only: the mesh is
@@ -172,6 +177,7 @@ def main():
     parser.add_argument("--spacing", help="voxel size SX,SY,SZ (overrides the file's)")
     parser.add_argument("--origin", default="0,0,0", help="centre of voxel (0,0,0) (default 0,0,0)")
     parser.add_argument("--json", help="write the step timings here")
+    parser.add_argument("--each-label", action="store_true", help="convert each label of a label map on its own")
     args = parser.parse_args()
 
     process_start = time.perf_counter()
@@ -184,20 +190,54 @@ def main():
     mask = object_mask(values, args.min, args.max)
     times["read"] = time.perf_counter() - start
 
-    start = time.perf_counter()
-    image = padded_image(mask)
-    times["pad"] = time.perf_counter() - start
-    polydata = slicer_closed_surface(image, args.smoothing, spacing, origin, times)
+    if args.each_label:
+        triangles, vertices = each_label(values, spacing, origin, args, times)
+    else:
+        start = time.perf_counter()
+        image = padded_image(mask)
+        times["pad"] = time.perf_counter() - start
+        polydata = slicer_closed_surface(image, args.smoothing, spacing, origin, times)
+        start = time.perf_counter()
+        write_mesh(polydata, args.output)
+        times["write"] = time.perf_counter() - start
+        triangles, vertices = polydata.GetNumberOfPolys(), polydata.GetNumberOfPoints()
     times["pipeline"] = sum(times[k] for k in ("pad", "flying_edges", "windowed_sinc", "transform_and_normals") if k in times)
-
-    start = time.perf_counter()
-    write_mesh(polydata, args.output)
-    times["write"] = time.perf_counter() - start
     times["total"] = time.perf_counter() - process_start
     if args.json:
         with open(args.json, "w") as f:
-            json.dump({"seconds": times, "triangles": polydata.GetNumberOfPolys(),
-                       "vertices": polydata.GetNumberOfPoints()}, f, indent=2)
+            json.dump({"seconds": times, "triangles": triangles, "vertices": vertices}, f, indent=2)
+
+
+def label_output(path, value):
+    stem, dot, extension = path.rpartition(".")
+    return f"{stem}-{value}.{extension}"
+
+
+def each_label(values, spacing, origin, args, times):
+    """Every segment on its own, cropped to its extent: Slicer's conversion of a segmentation."""
+    start = time.perf_counter()
+    labels = [int(v) for v in np.unique(values) if v != 0]
+    times["read"] += time.perf_counter() - start
+    triangles = vertices = 0
+    for value in labels:
+        start = time.perf_counter()
+        mask = values == value
+        extent = [np.nonzero(mask.any(axis=tuple(a for a in range(3) if a != d)))[0] for d in range(3)]
+        low = [int(e[0]) for e in extent]
+        high = [int(e[-1]) + 1 for e in extent]
+        image = padded_image(mask[low[0]:high[0], low[1]:high[1], low[2]:high[2]])
+        times["pad"] = times.get("pad", 0.0) + time.perf_counter() - start
+        shifted = tuple(o + s * l for o, s, l in zip(origin, spacing, low))
+        step = {}
+        polydata = slicer_closed_surface(image, args.smoothing, spacing, shifted, step)
+        for key, seconds in step.items():
+            times[key] = times.get(key, 0.0) + seconds
+        start = time.perf_counter()
+        write_mesh(polydata, label_output(args.output, value))
+        times["write"] = times.get("write", 0.0) + time.perf_counter() - start
+        triangles += polydata.GetNumberOfPolys()
+        vertices += polydata.GetNumberOfPoints()
+    return triangles, vertices
 
 
 if __name__ == "__main__":

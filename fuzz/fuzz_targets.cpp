@@ -3,6 +3,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -13,6 +14,7 @@
 
 #include "dsreg/error.hpp"
 #include "dsreg/implicit_shape.hpp"
+#include "dsreg/label_surface.hpp"
 #include "dsreg/mesh_io.hpp"
 #include "dsreg/normals_file.hpp"
 #include "dsreg/volume_io.hpp"
@@ -73,27 +75,78 @@ const Scratch& scratch() {
 // ----------------------------------------------------------------------------------------------
 // Volumes
 
-/// Checks the closed-manifold promise of the digital surface: every face edge is glued to an
-/// edge of an existing face that is glued back, and every corner is a valid vertex.
+/// Checks the closed-manifold promise of the digital surface: every face edge is glued, in the
+/// surface of each label of the face (its inner one; its outer one unless the background), to an
+/// edge of an existing face of that label that is glued back, and every corner is a valid vertex.
 void check_surface(const char* target, const DigitalSurface& s) {
     const std::int64_t m = s.face_count(), n = s.vertex_count();
-    FUZZ_CHECK(target, m > 0 && s.quads.cols() == 4 && s.adjacent_face.rows() == m, "surface arrays have the wrong size");
-    FUZZ_CHECK(target, static_cast<std::int64_t>(s.surfels.size()) == m, "one surfel per face");
-    for (std::int64_t f = 0; f < m; ++f)
-        for (int e = 0; e < 4; ++e) {
-            const std::int64_t v = s.quads(f, e);
-            FUZZ_CHECK(target, v >= 0 && v < n, "quad corner is not a vertex");
-            const std::int64_t g = s.adjacent_face(f, e);
-            FUZZ_CHECK(target, g >= 0 && g < m, "adjacent face out of range");
-            bool glued_back = false;
-            for (int b = 0; b < 4; ++b) glued_back = glued_back || s.adjacent_face(g, b) == f;
-            FUZZ_CHECK(target, glued_back, "face adjacency is not symmetric");
+    FUZZ_CHECK(target, m > 0 && s.quads.cols() == 4 && s.adjacent_face.rows() == m && s.adjacent_face_outer.rows() == m,
+               "surface arrays have the wrong size");
+    FUZZ_CHECK(target, static_cast<std::int64_t>(s.surfels.size()) == m && std::int64_t(s.face_labels.size()) == m,
+               "one surfel and one label pair per face");
+    const auto adjacent = [&](int side) -> const FaceMatrix& { return side == 0 ? s.adjacent_face : s.adjacent_face_outer; };
+    for (std::int64_t f = 0; f < m; ++f) {
+        const FaceLabels labels = s.face_labels[std::size_t(f)];
+        FUZZ_CHECK(target, labels.inner > labels.outer, "a face's inner label is not the higher one");
+        for (int side = 0; side < (labels.outer != 0 ? 2 : 1); ++side) {
+            const std::uint32_t label = side == 0 ? labels.inner : labels.outer;
+            for (int e = 0; e < 4; ++e) {
+                const std::int64_t v = s.quads(f, e);
+                FUZZ_CHECK(target, v >= 0 && v < n, "quad corner is not a vertex");
+                const std::int64_t g = adjacent(side)(f, e);
+                FUZZ_CHECK(target, g >= 0 && g < m, "adjacent face out of range");
+                const FaceLabels other = s.face_labels[std::size_t(g)];
+                FUZZ_CHECK(target, other.inner == label || other.outer == label, "a face is glued to a face of another label");
+                const int g_side = other.inner == label ? 0 : 1;
+                bool glued_back = false;
+                for (int b = 0; b < 4; ++b) glued_back = glued_back || adjacent(g_side)(g, b) == f;
+                FUZZ_CHECK(target, glued_back, "face adjacency is not symmetric");
+            }
         }
+    }
     FUZZ_CHECK(target, s.component_count >= 1 && s.component_count <= m, "component count out of range");
 }
 
+/// The label-map reader on a file the values reader accepted: the same header, every value a
+/// label. It may refuse only values that are not integers (or too many labels); what it returns
+/// names each voxel's value, and a small map gives a label complex whose every label is closed.
+void check_label_map(const char* target, const std::string& path, const RawVolumeLayout* layout, const ScalarVolume& values) {
+    LabelVolume labels;
+    try {
+        labels = read_label_volume(path, layout);
+    } catch (const Error& error) {
+        const std::string message = error.what();
+        FUZZ_CHECK(target, message.rfind(path + ": ", 0) == 0, "message does not start with the path: " + message);
+        const bool integer_format = layout == nullptr || (layout->type != RawVoxelType::Float32 && layout->type != RawVoxelType::Float64);
+        FUZZ_CHECK(target, !integer_format || message.find("is not an integer") != std::string::npos,
+                   "the label reader refused integer values: " + message);
+        return;
+    }
+    FUZZ_CHECK(target, labels.grid.dims == values.grid.dims, "label and values readers disagree on the dimensions");
+    FUZZ_CHECK(target, labels.labels.size() == values.values.size(), "one label per voxel");
+    FUZZ_CHECK(target, !labels.values.empty() && labels.values[0] == 0, "label 0 is not the background");
+    for (std::size_t l = 2; l < labels.values.size(); ++l)
+        FUZZ_CHECK(target, labels.values[l - 1] < labels.values[l], "label values are not increasing");
+    for (std::size_t i = 0; i < labels.labels.size(); ++i) {
+        FUZZ_CHECK(target, labels.labels[i] < labels.values.size(), "label index beyond the table");
+        FUZZ_CHECK(target, static_cast<float>(labels.values[labels.labels[i]]) == values.values[i],
+                   "label value differs from the value at voxel #" + std::to_string(i));
+    }
+    const bool labelled = std::any_of(labels.labels.begin(), labels.labels.end(), [](std::uint32_t l) { return l != 0; });
+    if (labels.grid.voxel_count() > 4096 || !labelled) return;
+    const DigitalSurface complex = extract_digital_surface(labels, labels.values.size() % 2 ? Connectivity::Six : Connectivity::TwentySix);
+    check_surface(target, complex);
+    for (const LabelMesh& mesh : label_meshes(complex)) {
+        for (const std::int64_t c : mesh.euler_characteristics())
+            FUZZ_CHECK(target, c <= 2 && c % 2 == 0, "a label's surface component is not a closed orientable surface");
+        FUZZ_CHECK(target, mesh.component_count >= 1, "a label without components");
+    }
+    const VertexLinks links = fairness_links(complex);
+    FUZZ_CHECK(target, std::int64_t(links.offsets.size()) == complex.vertex_count() + 1, "links of the wrong size");
+}
+
 /// Reads the file both ways (mask and values), checks they agree, and extracts the digital
-/// surface of small non-empty volumes.
+/// surface of small non-empty volumes; then as a label map.
 Outcome read_volume_file(const char* target, const std::string& path, const RawVolumeLayout* layout) {
     Outcome outcome;
     BinaryVolume volume;
@@ -132,6 +185,7 @@ Outcome read_volume_file(const char* target, const std::string& path, const RawV
         const Connectivity c = volume.object_voxel_count() % 2 ? Connectivity::Six : Connectivity::TwentySix;
         check_surface(target, extract_digital_surface(volume, c));
     }
+    check_label_map(target, path, layout, values);
     return outcome;
 }
 
@@ -259,6 +313,8 @@ void check_mesh(const char* target, const PolygonMesh& mesh) {
                "coordinate system other than LPS, RAS or none");
     for (const auto& [name, values] : mesh.vertex_scalars)
         FUZZ_CHECK(target, values.size() == n, "vertex scalar '" + name + "' has the wrong size");
+    for (const auto& [name, values] : mesh.face_integers)
+        FUZZ_CHECK(target, values.size() == mesh.faces.rows(), "face integer '" + name + "' has the wrong size");
 }
 
 Outcome mesh_target(const char* target, const std::uint8_t* data, std::size_t size) {
@@ -295,6 +351,15 @@ Outcome mesh_target(const char* target, const std::uint8_t* data, std::size_t si
         FUZZ_CHECK(target, again.faces == mesh.faces, "round trip changed the faces");
     }
     FUZZ_CHECK(target, again.coordinate_system == mesh.coordinate_system, "round trip changed the coordinate system");
+    // (.vtp names are taken verbatim from the XML attribute and escaped when written, so only
+    // their values are compared.)
+    if (extension == "ply" || extension == "vtk")
+        FUZZ_CHECK(target, again.face_integers == mesh.face_integers, "round trip changed the face integers");
+    if (extension == "vtp") {
+        FUZZ_CHECK(target, again.face_integers.size() == mesh.face_integers.size(), "round trip changed the face integers");
+        for (std::size_t i = 0; i < mesh.face_integers.size(); ++i)
+            FUZZ_CHECK(target, again.face_integers[i].second == mesh.face_integers[i].second, "round trip changed the face integers");
+    }
     return outcome;
 }
 

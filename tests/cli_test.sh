@@ -182,6 +182,44 @@ check "--no-repair report" python3 -c "import json,sys; v=json.load(open(sys.arg
 check "--no-check: no validity in the report" grep -q '"validity": null' "$work/leo3.json"
 check "--no-repair leaves the solved mesh" cmp -s "$work/leo2.obj" "$work/leo3.obj"
 check "a clean mesh is a valid solid" grep -q "; valid solid;" <<<"$("$DSREG" regularize --shape sphere9 --h 0.5 -o "$work/s9.obj" 2>&1)"
+# Label maps (--multi-label): every interface once with its two labels, one closed surface per label.
+python3 -c "
+import sys
+nx, ny, nz = 8, 6, 6
+v = bytearray(nx * ny * nz)
+for k in range(1, nz - 1):
+    for j in range(1, ny - 1):
+        for i in range(1, nx - 1):
+            v[i + nx * (j + ny * k)] = 3 if i < 4 else (7 if j < 3 else 9)
+open(sys.argv[1], 'wb').write(v)" "$work/labels.raw"
+"$DSREG" regularize "$work/labels.raw" --raw-dims 8,6,6 --multi-label -o "$work/labels.ply" --report "$work/labels.json" -q
+check "multi-label run exits 0" test $? -eq 0
+check "the complex names the labels of each face" grep -aq "property int inner_label" "$work/labels.ply"
+check "the complex names the outer label too" grep -aq "property int outer_label" "$work/labels.ply"
+check "one surface per label" test -s "$work/labels-3.ply" -a -s "$work/labels-7.ply" -a -s "$work/labels-9.ply"
+check "report lists the labels and junctions" python3 -c "
+import json, sys
+r = json.load(open(sys.argv[1]))
+labels = [l['label'] for l in r['labels']]
+ok = labels == [3, 7, 9] and r['label_complex']['junction_vertices'] > 0 and all(l['genus'] == 0 and l['volume'] > 0 for l in r['labels'])
+sys.exit(0 if ok else 1)" "$work/labels.json"
+"$DSREG" regularize "$work/labels.raw" --raw-dims 8,6,6 --labels 3,9 -o "$work/some.obj" -q
+check "--labels keeps the labels asked for" test -s "$work/some-3.obj" -a -s "$work/some-9.obj"
+check "--labels drops the others" test ! -e "$work/some-7.obj"
+summary=$("$DSREG" regularize "$work/labels.raw" --raw-dims 8,6,6 --multi-label -o "$work/labels.stl" 2>&1)
+check "summary line counts labels" grep -q "3 labels" <<<"$summary"
+"$DSREG" regularize "$work/labels.raw" --raw-dims 8,6,6 --multi-label --export-normals "$work/labels.normals" \
+    -o "$work/exported.obj" -q
+"$DSREG" regularize "$work/labels.raw" --raw-dims 8,6,6 --multi-label --normals-file "$work/labels.normals" \
+    -o "$work/imported.obj" -q
+check "a label map's normals read back give the same surfaces" cmp -s "$work/exported-7.obj" "$work/imported-7.obj"
+expect_error "--min and --multi-label" "--min chooses one object" regularize "$work/labels.raw" --raw-dims 8,6,6 \
+    --multi-label --min 3 -o "$work/out.ply"
+expect_error "--labels of an absent label" "no voxel has the label 5" regularize "$work/labels.raw" --raw-dims 8,6,6 \
+    --labels 3,5 -o "$work/out.ply"
+expect_error "--normals at and --multi-label" "does not apply to --multi-label" regularize "$work/labels.raw" \
+    --raw-dims 8,6,6 --multi-label --normals at -o "$work/out.ply"
+check "failed label runs leave no label surface" test -z "$(compgen -G "$work/out-*")"
 
 # Medical images (more in tests/medical_interop_test.py): --space and --label are checked, and a
 # shape's mesh in the default LPS is the grid frame itself (identity direction), untagged.

@@ -63,4 +63,25 @@ check "failed run keeps the existing page" grep -qx "old page" "$work/page.html"
 check "failed run leaves no temporary file" test -z "$(ls -A "$work" | grep '^\.')"
 rm -f "$work/page.html"
 
+# A label complex (regularize --multi-label) is coloured by the labels on either side of its faces,
+# read from the PLY face properties or the VTK cell data arrays.
+python3 -c "
+import sys
+v = bytearray(6 * 5 * 5)
+for k in range(1, 4):
+    for j in range(1, 4):
+        for i in range(1, 5):
+            v[i + 6 * (j + 5 * k)] = 1 if i < 3 else 4
+open(sys.argv[1], 'wb').write(v)" "$work/two.raw"
+for ext in ply vtk vtp; do
+    "$DSREG" regularize "$work/two.raw" --raw-dims 6,5,5 --multi-label --normals trivial -o "$work/two.$ext" -q
+    "$DSREG" view "$work/two.$ext" -o "$work/page-labels.html" -q
+    labels=$(grep -o '<script type="application/json" id="dsreg-page">.*</script>' "$work/page-labels.html")
+    check "view colours a .$ext label complex by its labels" grep -q '"labels":{[^}]*"values":\[0,1,4\]' <<<"$labels"
+    check "view lists the .$ext face labels" grep -q 'inner_label per face' <<<"$labels"
+done
+"$DSREG" view "$work/two-4.ply" -o "$work/page-labels.html" -q
+check "one label's surface has no label colours" test -z "$(grep -o '"labels":{' "$work/page-labels.html")"
+rm -f "$work/page-labels.html"
+
 finish

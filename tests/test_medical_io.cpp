@@ -80,6 +80,17 @@ const FormatCase kFormats[] = {
     {"a.tif", 1e-6, false, false},
 };
 
+/// The geometry a format keeps of `grid`.
+VoxelGrid grid_as_stored(const VoxelGrid& grid, const FormatCase& format) {
+    VoxelGrid expected = grid;
+    if (!format.keeps_direction) expected.direction.setIdentity();
+    if (!format.keeps_origin) {
+        expected.origin.setZero();
+        expected.spacing.z() = 1;
+    }
+    return expected;
+}
+
 TEST(MedicalIo, EveryFormatRoundTripsTheMaskAndTheGeometry) {
     ScratchFolder scratch("medical-roundtrip");
     const VoxelGrid grid = test::oblique_grid({24, 20, 16});
@@ -98,16 +109,59 @@ TEST(MedicalIo, EveryFormatRoundTripsTheMaskAndTheGeometry) {
             inside += labels[n] > 0;
         }
         EXPECT_GT(inside, 100);
-        VoxelGrid expected = grid;
-        if (!format.keeps_direction) expected.direction.setIdentity();
-        if (!format.keeps_origin) {
-            expected.origin.setZero();
-            expected.spacing.z() = 1;
-        }
-        expect_same_grid(volume.grid, expected, format.geometry_tolerance);
+        expect_same_grid(volume.grid, grid_as_stored(grid, format), format.geometry_tolerance);
         // Whatever the format, the direction the pipeline gets is orthonormal.
         EXPECT_LT((volume.grid.direction.transpose() * volume.grid.direction - Eigen::Matrix3d::Identity()).norm(), 1e-12);
     }
+}
+
+/// A label map of the ellipsoid cut in three by the planes x = centre and y = centre (index
+/// space), values 0, 2, 5 and 300 (above a byte), as doubles in voxel order.
+std::vector<double> three_labels(const VoxelGrid& grid) {
+    std::vector<double> labels = test::sample_ellipsoid(grid, test::test_ellipsoid(grid), 1);
+    for (std::int64_t k = 0; k < grid.dims[2]; ++k)
+        for (std::int64_t j = 0; j < grid.dims[1]; ++j)
+            for (std::int64_t i = 0; i < grid.dims[0]; ++i) {
+                double& label = labels[std::size_t(grid.linear_index(i, j, k))];
+                if (label != 0) label = 2 * i < grid.dims[0] ? 2 : 2 * j < grid.dims[1] ? 5 : 300;
+            }
+    return labels;
+}
+
+void expect_label_map(const LabelVolume& read, const std::vector<double>& labels) {
+    EXPECT_EQ(read.values, (std::vector<std::int64_t>{0, 2, 5, 300}));
+    ASSERT_EQ(read.labels.size(), labels.size());
+    for (std::size_t n = 0; n < labels.size(); ++n)
+        ASSERT_EQ(read.values[read.labels[n]], std::int64_t(labels[n])) << "voxel " << n;
+}
+
+TEST(MedicalIo, EveryFormatReadsAsTheSameLabelMapWithItsGeometry) {
+    ScratchFolder scratch("medical-labels");
+    const VoxelGrid grid = test::oblique_grid({24, 20, 16});
+    const std::vector<double> labels = three_labels(grid);
+    for (const FormatCase& format : kFormats) {
+        SCOPED_TRACE(format.name);
+        const std::string path = scratch.path(format.name);
+        write_image(path, grid, labels, RawVoxelType::UInt16);
+        VolumeFileInfo info;
+        const LabelVolume read = read_label_volume(path, nullptr, {}, &info);
+        EXPECT_EQ(info.value_type, "uint16");
+        EXPECT_EQ(info.world_geometry, format.keeps_origin);
+        expect_label_map(read, labels);
+        expect_same_grid(read.grid, grid_as_stored(grid, format), format.geometry_tolerance);
+    }
+    for (const bool fortran : {false, true}) {  // C order is read plane by plane
+        SCOPED_TRACE(fortran ? "fortran.npy" : "c.npy");
+        const std::string path = scratch.path(fortran ? "f.npy" : "c.npy");
+        write_npy(path, grid.dims, labels, RawVoxelType::Int32, fortran);
+        expect_label_map(read_label_volume(path), labels);
+    }
+    const std::string dicom = scratch.path("dicom");
+    std::filesystem::create_directories(dicom);
+    write_dicom_series(dicom, grid, labels, RawVoxelType::UInt16);
+    const LabelVolume series = read_label_volume(dicom);
+    expect_label_map(series, labels);
+    expect_same_grid(series.grid, grid, 1e-6);
 }
 
 TEST(MedicalIo, EveryValueTypeInNiftiNrrdMetaImageAndNpy) {

@@ -180,13 +180,18 @@ TEST(NormalsFile, ExportedAtFieldGivesTheSameRegularizedMesh) {
 
 // ---- convolved trivial normals -----------------------------------------------------------------
 
+/// The definition: the sum of the trivial normals within r, each weighted by its face's area.
 PointMatrix brute_force_convolved(const DigitalSurface& s, double r) {
     const PointMatrix c = surfel_centers(s);
+    const Eigen::Vector3d& h = s.grid.spacing;
     PointMatrix u(s.face_count(), 3);
     for (std::int64_t f = 0; f < s.face_count(); ++f) {
         Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
-        for (std::int64_t g = 0; g < s.face_count(); ++g)
-            if ((c.row(g) - c.row(f)).squaredNorm() <= r * r) sum += s.surfels[std::size_t(g)].trivial_normal().transpose();
+        for (std::int64_t g = 0; g < s.face_count(); ++g) {
+            const int axis = s.surfels[std::size_t(g)].axis;
+            const double area = h.prod() / h[axis];
+            if ((c.row(g) - c.row(f)).squaredNorm() <= r * r) sum += area * s.surfels[std::size_t(g)].trivial_normal().transpose();
+        }
         u.row(f) = sum.normalized();
     }
     return u;
@@ -238,6 +243,35 @@ TEST(ConvolvedNormals, ApproachTheTrueNormalOfATiltedPlane) {
     }
     ASSERT_GT(count, 100);
     EXPECT_LT(convolved_error / count, 0.1 * trivial_error / count);
+}
+
+TEST(ConvolvedNormals, ApproachTheTrueNormalOfATiltedPlaneOnAnAnisotropicGrid) {
+    // Without the area weights the sum leans towards the axes of the smaller faces: on this grid
+    // (faces across x are 1.6 times smaller than across z) the mean error is 15 degrees, not 2.
+    const Eigen::Vector3d h(0.7, 1.0, 1.6), n = Eigen::Vector3d(1, 2, 2).normalized();
+    const Eigen::Vector3d centre(14.5 * 0.7, 14.5, 10.5 * 1.6);
+    BinaryVolume v = test::make_volume({30, 30, 22}, [&](double x, double y, double z) {
+        return n.dot(h.cwiseProduct(Eigen::Vector3d(x, y, z)) - centre) <= 0;
+    });
+    v.grid.spacing = h;
+    const DigitalSurface s = extract_digital_surface(v, Connectivity::TwentySix);
+    const PointMatrix c = surfel_centers(s), convolved = convolved_trivial_normals(s, 5.0);
+    double error = 0, unweighted_error = 0;
+    int count = 0;
+    for (std::int64_t f = 0; f < s.face_count(); ++f) {
+        const Eigen::Vector3d p = c.row(f).transpose() - centre;
+        if (std::abs(p.dot(n)) > 2 || (p - p.dot(n) * n).norm() > 6) continue;  // on the plane, far from the box
+        error += std::acos(std::min(1.0, convolved.row(f).dot(n)));
+        Eigen::RowVector3d unweighted = Eigen::RowVector3d::Zero();  // the plain sum of the trivial normals
+        for (std::int64_t g = 0; g < s.face_count(); ++g)
+            if ((c.row(g) - c.row(f)).squaredNorm() <= 25.0) unweighted += s.surfels[std::size_t(g)].trivial_normal().transpose();
+        unweighted_error += std::acos(std::min(1.0, unweighted.normalized().dot(n.transpose())));
+        ++count;
+    }
+    ASSERT_GT(count, 50);
+    std::printf("convolved trivial normals, tilted plane, spacing 0.7 x 1 x 1.6: mean error %.2f degrees weighted by area, "
+                "%.2f unweighted\n", error / count * 180 / M_PI, unweighted_error / count * 180 / M_PI);
+    EXPECT_LT(error, 0.5 * unweighted_error);
 }
 
 TEST(ConvolvedNormals, ThinPlateKeepsUnitNormalsAndRadiusIsChecked) {

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <functional>
 #include <initializer_list>
 #include <string>
@@ -31,6 +32,39 @@ inline BinaryVolume make_volume(const Index3& dims, const std::function<bool(dou
 inline BinaryVolume make_voxels(const Index3& dims, std::initializer_list<Index3> voxels) {
     BinaryVolume v = make_volume(dims, [](double, double, double) { return false; });
     for (const Index3& x : voxels) v.mask[std::size_t(v.grid.linear_index(x[0], x[1], x[2]))] = 1;
+    return v;
+}
+
+/// A label map of `dims` voxels (spacing 1, origin 0) whose voxel (i,j,k) has the value
+/// label(i,j,k) (0 = background), indexed as read_label_volume would: values increasing.
+inline LabelVolume make_labels(const Index3& dims, const std::function<std::int64_t(std::int64_t, std::int64_t, std::int64_t)>& label) {
+    LabelVolume v;
+    v.grid.dims = dims;
+    std::vector<std::int64_t> raw(std::size_t(v.grid.voxel_count()));
+    std::vector<std::int64_t> values = {0};
+    for (std::int64_t k = 0; k < dims[2]; ++k)
+        for (std::int64_t j = 0; j < dims[1]; ++j)
+            for (std::int64_t i = 0; i < dims[0]; ++i) {
+                const std::int64_t value = label(i, j, k);
+                raw[std::size_t(v.grid.linear_index(i, j, k))] = value;
+                if (value != 0) values.push_back(value);
+            }
+    std::sort(values.begin() + 1, values.end());
+    values.erase(std::unique(values.begin() + 1, values.end()), values.end());
+    v.values = values;
+    v.labels.resize(raw.size());
+    for (std::size_t q = 0; q < raw.size(); ++q)
+        v.labels[q] = raw[q] == 0 ? 0u
+                                  : std::uint32_t(std::lower_bound(values.begin() + 1, values.end(), raw[q]) - values.begin());
+    return v;
+}
+
+/// The indicator of label index `label` of a label map.
+inline BinaryVolume indicator(const LabelVolume& labels, std::uint32_t label) {
+    BinaryVolume v;
+    v.grid = labels.grid;
+    v.mask.resize(labels.labels.size());
+    for (std::size_t q = 0; q < v.mask.size(); ++q) v.mask[q] = labels.labels[q] == label ? 1 : 0;
     return v;
 }
 

@@ -43,7 +43,9 @@ struct StoredArray {
         for (std::int64_t k = 0; k < kDims[2]; ++k)
             for (std::int64_t j = 0; j < kDims[1]; ++j)
                 for (std::int64_t i = 0; i < kDims[0]; ++i) {
-                    const T value = static_cast<T>(test_value(i, j, k));
+                    // unsigned types store the negative values as 0 (the cast of −2 would be undefined)
+                    const double v = test_value(i, j, k);
+                    const T value = static_cast<T>(kind == ValueKind::Unsigned && v < 0 ? 0.0 : v);
                     std::uint8_t* at = bytes.data() + i * strides[0] + j * strides[1] + k * strides[2];
                     std::memcpy(at, &value, sizeof(T));
                     if (swap) std::reverse(at, at + sizeof(T));

@@ -61,7 +61,9 @@ struct AdaptiveNormalField {
 /// of extrapolated_integral_invariant_normals at max_radius plus two distance transforms.
 /// Throws dsreg::Error for radii that are not positive and finite, min_radius > max_radius, a
 /// reach factor that is not positive, or fewer than two levels per octave.
-AdaptiveNormalField adaptive_integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface,
+/// On a label map's complex each face's field is that of its inner label's indicator, and its
+/// reach and thicknesses those of its inner and outer labels (local_reach.hpp).
+AdaptiveNormalField adaptive_integral_invariant_normals(const VoxelLabels& volume, const DigitalSurface& surface,
                                                         const AdaptiveNormalOptions& options);
 
 }  // namespace dsreg

@@ -1,5 +1,6 @@
-// dsreg — the digital surface of a binary volume as a closed, oriented quad 2-manifold
-// (second stage of the pipeline).
+// dsreg — the digital surface of a binary volume as a closed, oriented quad 2-manifold, and of a
+// label map as a complex of such manifolds sharing their interfaces (second stage of the
+// pipeline; docs/multi-label.md).
 //
 // A surfel is a voxel face between an object voxel and a background voxel. Its quad lists the
 // 4 corner vertices counter-clockwise seen from outside (normal from object to background).
@@ -16,6 +17,17 @@
 // touching by one edge and nothing else, with 26-connectivity). Such a linel takes the other
 // pairing, which gives each end pointel two vertices (docs/validity.md). So no two faces ever
 // run along the same pair of vertices in the same direction.
+//
+// Label maps. A face lies between every two voxels of different labels (the background, label
+// 0, included; outside the grid is background). It is stored once, as the surfel of its
+// *inner* label, the higher label index of the two, with its normal towards the *outer* (lower)
+// one; a binary volume is the label map {0, 1}, and gives the surface above, face for face.
+// Each label's faces are paired at its linels by the rule above, applied to that label's own
+// indicator, so each label's umbrellas are exactly those of its binary digital surface. A
+// vertex is a class of face corners at one pointel that some label's umbrella joins: faces
+// between two labels carry one set of vertices, shared by both. Where three or more regions
+// meet (junction curves and points) the complex is not a manifold; each label's surface still
+// is (label_meshes() in label_surface.hpp, with one vertex per umbrella).
 #pragma once
 
 #include <Eigen/Core>
@@ -43,25 +55,43 @@ struct Surfel {
     }
 };
 
+/// The two labels of a face: `inner` (the voxel of its surfel) > `outer` (across the face).
+struct FaceLabels {
+    std::uint32_t inner;
+    std::uint32_t outer;
+};
+
 struct DigitalSurface {
     VoxelGrid grid;
-    std::vector<Surfel> surfels;  ///< face f is surfels[f]
-    FaceMatrix quads;             ///< m×4, counter-clockwise seen from outside
+    std::vector<Surfel> surfels;  ///< face f is surfels[f]; its voxel is the one of the inner label
+    FaceMatrix quads;             ///< m×4, counter-clockwise seen from outside the inner label
     PointMatrix vertices;         ///< n×3 physical positions p (pointel positions)
     Eigen::Matrix<std::int32_t, Eigen::Dynamic, 3, Eigen::RowMajor> vertex_pointels;  ///< pointel (a,b,c) of each vertex
-    /// adjacent_face(f, e): the face across edge e of face f (edge e joins corners e and e+1 mod 4).
+    /// adjacent_face(f, e): the face across edge e of face f (edge e joins corners e and e+1 mod 4)
+    /// in the surface of the inner label of f.
     FaceMatrix adjacent_face;
+    /// The same in the surface of the outer label of f; −1 where that is the background (so all
+    /// −1 for a binary volume).
+    FaceMatrix adjacent_face_outer;
+    std::vector<FaceLabels> face_labels;       ///< label indices of each face (binary: all {1, 0})
+    std::vector<std::int64_t> label_values;    ///< input value of each label index (binary: {0, 1})
     std::vector<std::int32_t> face_component;  ///< connected component of each face, 0-based
     std::int32_t component_count = 0;
     std::int64_t split_pointel_count = 0;  ///< pointels that carry more than one vertex
 
     std::int64_t face_count() const { return quads.rows(); }
     std::int64_t vertex_count() const { return vertices.rows(); }
+    std::int64_t label_count() const { return static_cast<std::int64_t>(label_values.size()); }
 };
 
 /// Extracts the digital surface of the object voxels of `volume` (outside the grid is background).
 /// Throws dsreg::Error if the object is empty.
 DigitalSurface extract_digital_surface(const BinaryVolume& volume, Connectivity connectivity);
+
+/// The complex of every interface of a label map: the same construction, a binary volume being
+/// the label map {0, 1} (label_volume_from_mask gives the surface above exactly). Connectivity
+/// applies to each label's own indicator. Throws dsreg::Error if no voxel has a label.
+DigitalSurface extract_digital_surface(const LabelVolume& volume, Connectivity connectivity);
 
 /// Physical centre of each surfel (m×3).
 PointMatrix surfel_centers(const DigitalSurface& surface);

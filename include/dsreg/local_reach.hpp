@@ -10,6 +10,9 @@
 // voxel centre) and D_obj (from each background voxel centre to the nearest object voxel centre),
 // distance_transform.hpp, computed on the grid grown by the cap so that the background outside
 // the volume counts, and kept in 1/16 of the smallest spacing (rounded down; 2 bytes per voxel).
+// On a label map (VoxelLabels, volume.hpp) every label is an "object" of its own: a voxel keeps
+// the distance to the nearest voxel of another label, and a face's inner side is its inner
+// label, its outer side its outer label (the background being label 0).
 #pragma once
 
 #include <Eigen/Core>
@@ -36,10 +39,11 @@ struct ReachMaps {
     }
 };
 
-/// The maps for reaches up to `cap` (physical units): two distance transforms, one at a time
-/// (4 bytes per voxel of the grown grid while each runs). Throws dsreg::Error for a cap that is
+/// The maps for reaches up to `cap` (physical units): the distance transform of the labelled
+/// voxels on the grown grid (4 bytes per voxel while it runs), then that of each label on its
+/// bounding box grown by the cap. Throws dsreg::Error for a cap that is
 /// not positive and finite, or so large that the distances would not fit (about 4000 voxels).
-ReachMaps reach_maps(const BinaryVolume& volume, double cap);
+ReachMaps reach_maps(const VoxelLabels& volume, double cap);
 
 /// Local reach of the object and of the background at every surfel, physical units. With c the
 /// surfel centre, n its outward direction, v its object voxel and w its background voxel:
@@ -60,10 +64,10 @@ struct SurfelReach {
 
 /// The reach of every surfel along `directions` (one outward unit vector per surfel, e.g. a
 /// normal field). Throws dsreg::Error for a wrong number of directions.
-SurfelReach surfel_reach(const BinaryVolume& volume, const DigitalSurface& surface, const PointMatrix& directions,
+SurfelReach surfel_reach(const VoxelLabels& volume, const DigitalSurface& surface, const PointMatrix& directions,
                          const ReachMaps& maps);
 /// The same, computing the maps for `cap`.
-SurfelReach surfel_reach(const BinaryVolume& volume, const DigitalSurface& surface, const PointMatrix& directions,
+SurfelReach surfel_reach(const VoxelLabels& volume, const DigitalSurface& surface, const PointMatrix& directions,
                          double cap);
 
 /// Half the local thickness at voxel v of the volume (of the object if v is an object voxel, of
@@ -71,7 +75,7 @@ SurfelReach surfel_reach(const BinaryVolume& volume, const DigitalSurface& surfa
 /// same kind that holds no centre of the other kind (radius D(y)) and contains v (|y − v| <
 /// D(y)), the local-thickness measure of Hildebrand and Rüegsegger. Balls are searched up to
 /// `limit` (physical, at most the maps' cap): the result is min(half thickness, limit).
-double half_local_thickness(const BinaryVolume& volume, const ReachMaps& maps, const Index3& v, double limit);
+double half_local_thickness(const VoxelLabels& volume, const ReachMaps& maps, const Index3& v, double limit);
 
 /// Each value replaced by the largest over the faces within `rings` steps of edge adjacency:
 /// features of one or two voxels (digitization noise: a voxel sticking out, a pit) no longer

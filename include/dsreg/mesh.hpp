@@ -29,6 +29,10 @@ struct PolygonMesh {
     /// unspecified (grid frame, voxel coordinates). Writers record it the way Slicer does
     /// (dsreg/mesh_io.hpp) so that Slicer places the mesh without asking; readers restore it.
     std::string coordinate_system;
+    /// Named per-face integers, e.g. the labels on either side of each face of a label complex.
+    /// Added last, with a default member initializer, so that aggregate initialization
+    /// {vertices, faces, normals, scalars} stays valid and warning-free.
+    std::vector<std::pair<std::string, Eigen::VectorXi>> face_integers{};
 };
 
 }  // namespace dsreg

@@ -19,7 +19,8 @@
 //  * OFF: "OFF", counts, vertex lines, "n i j k [l]" face lines. Quads stay quads. No attributes.
 //  * PLY: binary_little_endian 1.0; vertex x y z as double plus one float property per vertex
 //    scalar (names must be single words other than x, y, z); face "list uchar int
-//    vertex_indices" plus float nx ny nz when face_normals is set.
+//    vertex_indices" plus float nx ny nz when face_normals is set, then one int property per
+//    face integer (single words other than nx, ny, nz, vertex_indices).
 //  * STL: binary; quads are split along their shorter diagonal; each facet normal is the unit
 //    geometric normal of its triangle, or 0 for a degenerate triangle.
 //  * VTK: legacy "# vtk DataFile Version 4.2" (what Slicer writes), BINARY; POINTS double,
@@ -45,7 +46,9 @@
 //    properties x, y, z of any numeric type; its other scalar properties become vertex_scalars
 //    (same name, read as double), its list properties are skipped. Element "face" needs a list
 //    "vertex_indices" (or "vertex_index") of integers; scalar properties nx, ny, nz (all three)
-//    become face_normals; other properties are skipped. Other elements are skipped.
+//    become face_normals; other scalar properties of an integer type become face_integers
+//    (duplicated with their quad when quads are split); other properties are skipped. Other
+//    elements are skipped.
 //  * STL: ASCII (starts with "solid", several solids allowed) or binary (size 84 + 50 × the
 //    triangle count of the header). Identical positions are merged, so the mesh is indexed;
 //    the facet normals of the file are not kept.
@@ -66,9 +69,9 @@
 namespace dsreg {
 
 /// Splits every quad (a,b,c,d) into two triangles along its shorter diagonal, keeping the
-/// orientation: (a,b,c),(a,c,d) when |ac| <= |bd|, else (a,b,d),(b,c,d). Face normals are
-/// duplicated per triangle, vertices and vertex scalars are kept. Triangle meshes are returned
-/// unchanged. Throws dsreg::Error for faces of another size or indices out of range.
+/// orientation: (a,b,c),(a,c,d) when |ac| <= |bd|, else (a,b,d),(b,c,d). Face normals and face
+/// integers are duplicated per triangle, vertices and vertex scalars are kept. Triangle meshes
+/// are returned unchanged. Throws dsreg::Error for faces of another size or indices out of range.
 PolygonMesh triangulate_shorter_diagonal(const PolygonMesh& mesh);
 
 /// The checks write_mesh makes before writing (see above: face sizes, indices, finite

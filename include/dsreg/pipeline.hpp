@@ -27,6 +27,8 @@
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/html_view.hpp"
 #include "dsreg/implicit_shape.hpp"
+#include "dsreg/label_evaluation.hpp"
+#include "dsreg/label_surface.hpp"
 #include "dsreg/mesh.hpp"
 #include "dsreg/progress.hpp"
 #include "dsreg/regularization.hpp"
@@ -60,16 +62,27 @@ struct VolumeSource {
     std::optional<Eigen::Vector3d> spacing;      ///< overrides the file's voxel size; an array's (default 1)
     std::int64_t max_voxels = std::int64_t(1) << 34;
     std::string max_memory;  ///< --max-memory as given ("4G"); empty = no limit
+    /// --multi-label: the input is a label map, every non-zero value a label (a --shape is the
+    /// label map {0, 1}), and the run regularizes every interface at once (docs/multi-label.md).
+    bool multi_label = false;
+    /// --labels: the labels kept (values); the other voxels join the background. Implies multi_label.
+    std::vector<std::int64_t> labels;
+
+    bool is_multi_label() const { return multi_label || !labels.empty(); }
 };
 
-/// A binary volume ready for the pipeline, with what the report says of it.
+/// A volume ready for the pipeline, with what the report says of it.
 struct LoadedVolume {
-    BinaryVolume volume;
+    BinaryVolume volume;  ///< the object; for a label map only its grid (the mask is empty)
+    std::optional<LabelVolume> labels;   ///< set for --multi-label: the label map
     std::string description;             ///< e.g. "bunny.vol" or "goursat at h=0.25"
     std::optional<ImplicitShape> shape;  ///< set for --shape inputs
     double h = 1;                        ///< grid step (largest spacing for files and arrays)
     VolumeFileInfo file;                 ///< format, value type and notes of a file input (format "array" for arrays)
     std::vector<std::string> warnings;   ///< e.g. an object taking most of the volume
+
+    /// The voxels' labels: the label map's, or the object's (label 1).
+    VoxelLabels voxel_labels() const { return labels ? VoxelLabels(*labels) : VoxelLabels(volume); }
 };
 
 /// Reads, digitizes or thresholds the volume. Honours max_voxels and max_memory before reading
@@ -95,6 +108,8 @@ std::uint64_t parse_memory_size(const std::string& option, const std::string& te
 /// the border counting as background), counted without building the surface: one pass over
 /// the voxels, no allocation.
 std::int64_t count_surfels(const BinaryVolume& volume);
+/// The faces of a label map's complex (every two 6-neighbours of different labels, once).
+std::int64_t count_surfels(const LabelVolume& volume);
 
 /// Estimated peak memory (bytes) of the pipeline on `voxels` voxels whose object has `surfels`
 /// surfels: a fixed 16 MiB, 1 byte per voxel (the mask), 3300 bytes per surfel (the surface, its
@@ -103,7 +118,8 @@ std::int64_t count_surfels(const BinaryVolume& volume);
 /// bytes). Fitted on goursat h = 0.5 … 0.125 and bunny-128 (measured peaks 105 MiB … 1.86 GiB),
 /// it overestimates by 10–30%. Local weight maps (4 bytes per voxel each) and Ambrosio–Tortorelli
 /// normals are not counted.
-double estimate_run_memory(std::int64_t voxels, std::int64_t surfels, bool factorization);
+/// A label map costs 4 bytes per voxel instead of 1 (`bytes_per_voxel`).
+double estimate_run_memory(std::int64_t voxels, std::int64_t surfels, bool factorization, int bytes_per_voxel = 1);
 
 /// Throws dsreg::Error if `source.max_memory` is set and the estimate above exceeds it. The
 /// message gives the estimate, the counts it is made of, and what to change.
@@ -159,6 +175,9 @@ struct NormalField {
     bool ii_extrapolated = false;                ///< Richardson-extrapolated integral invariants
     std::optional<AdaptiveNormalField> adaptive;  ///< set for the adaptive field (radii, reach)
     std::optional<AmbrosioTortorelliResult> at;  ///< set for --normals at
+    /// Label maps: faces near a junction given the convolved trivial normals of their own
+    /// interface (use_interface_normals_near_junctions, normals.hpp).
+    std::int64_t interface_normal_faces = 0;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -209,6 +228,10 @@ struct PipelineOptions {
 /// Checks every option of a run before any long computation. Throws dsreg::Error naming the flag.
 void check_pipeline_options(const PipelineOptions& options, bool input_is_shape);
 
+/// With --multi-label: what does not combine with it (--min/--max, --clamp, normal fields other
+/// than ii, trivial or a file). Throws dsreg::Error naming the flags.
+void check_multi_label_options(const VolumeSource& source, const PipelineOptions& options);
+
 struct PipelineResult {
     std::string input;  ///< description of the input volume
     VoxelGrid grid;
@@ -227,6 +250,10 @@ struct PipelineResult {
     std::optional<ValidityRepairReport> validity;
     nlohmann::json extension_report;  ///< "metric", "local_weights", "shrink_correction", and "clamp" with --clamp
     std::vector<std::pair<std::string, double>> stage_seconds;  ///< wall time of each stage, in order
+    // Label maps only (--multi-label; empty otherwise):
+    std::vector<LabelMesh> label_meshes;        ///< the closed surface of each label
+    std::vector<LabelMeasures> label_measures;  ///< faces, area, volume, topology of each
+    Junctions junctions;                        ///< junction vertices and edges of the complex
 };
 
 /// Surface, normals and regularization of `loaded` (stages "surface", "normals", "at",
@@ -268,6 +295,9 @@ struct PipelineOutputs {
     }
 };
 
+/// The file of one label's surface next to -o: "out.ply" and label 7 give "out-7.ply".
+std::string label_output_path(const std::string& mesh_path, std::int64_t value);
+
 /// The output mesh of result_mesh() in `space`, tagged with its coordinate system when the input
 /// file has a world geometry. Triangles are split in the grid frame, where lengths are physical.
 PolygonMesh output_mesh(const PipelineResult& result, const PipelineOutputs& outputs, bool digital = false);
@@ -281,6 +311,11 @@ ViewPage result_page(const PipelineResult& result, const PipelineOptions& option
 
 /// Checks the output paths (extensions, folders, two outputs on one file) before any work.
 void check_pipeline_outputs(const PipelineOutputs& outputs);
+
+/// Writes every output (each atomically), the report last; adds the "write" stage to `result`.
+/// For a label map, -o holds every interface face once with the int face properties
+/// inner_label and outer_label (label values; the face normal points from inner to outer), and
+/// label_output_path(-o, value) the closed surface of each label, oriented outward.
 
 /// Writes every output (each atomically; the page after the meshes, the report last); adds the
 /// "write" stage to `result`.

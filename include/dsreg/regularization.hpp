@@ -88,7 +88,8 @@ struct RegularizationResult {
     double solve_seconds = 0;     ///< wall time of the solver (factorization included)
 };
 
-/// The whole fourth stage: links, assembly of eq. (22–23), solve, energies before and after.
+/// The whole fourth stage: links (fairness_links: the quad links of a binary surface, junction-aware
+/// on a label complex, label_surface.hpp), assembly of eq. (22–23), solve, energies before and after.
 RegularizationResult regularize(const DigitalSurface& surface, const PointMatrix& normals,
                                 const RegularizationWeights& weights, const SolverOptions& solver);
 

@@ -19,6 +19,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <string>
 #include <vector>
 
 namespace dsreg {
@@ -61,6 +62,55 @@ struct BinaryVolume {
     }
     std::int64_t object_voxel_count() const;
 };
+
+/// A label map: every voxel carries a label index, 0 being the background (as is everything
+/// outside the grid). Indices are compact, 0 … label_count() − 1, in increasing order of the
+/// voxel values they stand for: values[index] is the value of label `index` in the input
+/// (values[0] = 0, the background, even when no voxel has it). 4 bytes per voxel.
+struct LabelVolume {
+    VoxelGrid grid;
+    std::vector<std::uint32_t> labels;  ///< label index of each voxel (linear_index order)
+    std::vector<std::int64_t> values;   ///< input value of each label index; values[0] = 0
+
+    std::uint32_t label(std::int64_t i, std::int64_t j, std::int64_t k) const {
+        return grid.contains(i, j, k) ? labels[static_cast<std::size_t>(grid.linear_index(i, j, k))] : 0u;
+    }
+    std::int64_t label_count() const { return static_cast<std::int64_t>(values.size()); }
+    /// Voxels of each label index (index 0: background voxels of the grid).
+    std::vector<std::int64_t> voxel_counts() const;
+};
+
+/// A read-only view of the label index of every voxel, of a binary volume (object 1,
+/// background 0) or of a label map, for the stages that treat both alike (the adaptive normals,
+/// the local reach). It points to the volume it was made from, which must outlive it.
+class VoxelLabels {
+public:
+    VoxelLabels(const BinaryVolume& volume) : grid_(&volume.grid), mask_(volume.mask.data()) {}  // NOLINT: implicit
+    VoxelLabels(const LabelVolume& volume) : grid_(&volume.grid), labels_(volume.labels.data()) {}  // NOLINT: implicit
+
+    const VoxelGrid& grid() const { return *grid_; }
+    /// Label index of voxel (i,j,k); 0 outside the grid.
+    std::uint32_t at(std::int64_t i, std::int64_t j, std::int64_t k) const {
+        return grid_->contains(i, j, k) ? at_linear(grid_->linear_index(i, j, k)) : 0u;
+    }
+    std::uint32_t at_linear(std::int64_t index) const {
+        return labels_ ? labels_[index] : (mask_[index] != 0 ? 1u : 0u);
+    }
+    bool is_binary() const { return labels_ == nullptr; }
+
+private:
+    const VoxelGrid* grid_;
+    const std::uint8_t* mask_ = nullptr;
+    const std::uint32_t* labels_ = nullptr;
+};
+
+/// The binary volume as a label map: label 1 (value 1) for the object, 0 elsewhere.
+LabelVolume label_volume_from_mask(const BinaryVolume& volume);
+
+/// Keeps the labels whose value is listed (each must occur in the volume) and turns every other
+/// voxel into background; the indices are renumbered compactly. Throws dsreg::Error naming
+/// `option` for a listed value that is 0 or absent.
+void keep_labels(LabelVolume& volume, const std::vector<std::int64_t>& values, const std::string& option);
 
 /// Which voxel values form the object. Default: value > 0. With `min` set the test is
 /// value ≥ min; with `max` set, value ≤ max (both inclusive, as `--min/--max` in the CLI).

@@ -77,6 +77,7 @@ struct VolumeFileInfo {
 /// Limits that protect the machine from absurd headers.
 struct VolumeLimits {
     std::int64_t max_voxels = std::int64_t(1) << 34;  ///< 16 Gi voxels
+    std::int64_t max_labels = std::int64_t(1) << 20;  ///< distinct labels of a label map (read_label_volume)
 };
 
 /// Parse a RawVoxelType from its CLI name: uint8 int8 uint16 int16 uint32 int32 uint64 int64
@@ -133,6 +134,14 @@ void write_dicom_series(const std::string& folder, const VoxelGrid& grid, const 
 /// the array a[i, j, k] = values[grid index of (i,j,k)] converted to `type`. Atomic.
 void write_npy(const std::string& path, const Index3& dims, const std::vector<double>& values, RawVoxelType type,
                bool fortran_order = false);
+
+/// A label map (any format read_volume accepts, same checks and errors): every distinct value
+/// is a label, 0 the background. Values must be integers (below 2^53 in magnitude) and there may
+/// be at most limits.max_labels distinct ones; otherwise dsreg::Error names the file and the
+/// voxel. 4 bytes per voxel (label indices, volume.hpp). The grid has the file's spacing, origin
+/// and direction, as read_volume's; `info`, if given, receives the format, value type and notes.
+LabelVolume read_label_volume(const std::string& path, const RawVolumeLayout* raw_layout = nullptr,
+                              const VolumeLimits& limits = {}, VolumeFileInfo* info = nullptr);
 
 /// Writers (atomic: a temporary file renamed into place). `values` holds one value per voxel of
 /// `dims`, x fastest. Used by tests, fuzz seeds and users converting volumes. They throw

@@ -68,6 +68,12 @@ void check_faces(const std::string& context, const PolygonMesh& mesh) {
         throw Error(context + ": " + std::to_string(mesh.face_normals.rows()) + " face normals for " +
                     std::to_string(faces.rows()) + " faces");
     }
+    for (const auto& [name, values] : mesh.face_integers) {
+        if (values.size() != faces.rows()) {
+            throw Error(context + ": face integer '" + name + "' has " + std::to_string(values.size()) + " values for " +
+                        std::to_string(faces.rows()) + " faces");
+        }
+    }
 }
 
 void check_mesh_for_writing(const std::string& path, const PolygonMesh& mesh) {

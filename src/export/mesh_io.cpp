@@ -111,11 +111,14 @@ PolygonMesh triangulate_shorter_diagonal(const PolygonMesh& mesh) {
     const bool with_normals = mesh.face_normals.rows() > 0;
     result.faces.resize(2 * quad_count, 3);
     if (with_normals) result.face_normals.resize(2 * quad_count, 3);
+    for (const auto& [name, values] : mesh.face_integers) result.face_integers.emplace_back(name, Eigen::VectorXi(2 * quad_count));
     for (Eigen::Index q = 0; q < quad_count; ++q) {
         const auto triangles = mesh_format::split_quad(mesh.vertices, mesh.faces.row(q).data());
         for (int t = 0; t < 2; ++t) {
             result.faces.row(2 * q + t) << triangles[t][0], triangles[t][1], triangles[t][2];
             if (with_normals) result.face_normals.row(2 * q + t) = mesh.face_normals.row(q);
+            for (std::size_t i = 0; i < mesh.face_integers.size(); ++i)
+                result.face_integers[i].second[2 * q + t] = mesh.face_integers[i].second[q];
         }
     }
     return result;

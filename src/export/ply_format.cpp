@@ -2,14 +2,14 @@
 //
 // Writing: binary_little_endian 1.0; element vertex with double x y z plus one float property
 // per vertex scalar; element face with "list uchar int vertex_indices" plus float nx ny nz when
-// the mesh has face normals.
+// the mesh has face normals, then one int property per face integer.
 //
 // Reading: ascii, binary_little_endian and binary_big_endian. Element "vertex" needs scalar
 // properties x, y, z (any numeric type); its other scalar properties become vertex scalars of
 // the same name, its list properties are skipped. Element "face" needs a list property
 // "vertex_indices" (or "vertex_index") with integer count and index types, each face with 3 or 4
-// indices; scalar properties nx, ny, nz (all three) become face_normals; other properties are
-// skipped. Other elements are skipped. The counts of the header are checked against the size of
+// indices; scalar properties nx, ny, nz (all three) become face_normals; other integer scalar
+// properties become face integers; other properties are skipped. Other elements are skipped. The counts of the header are checked against the size of
 // the file before anything is allocated. Bytes after the last element of a binary file are
 // ignored; anything but white space after the last element of an ASCII file is an error.
 #include <algorithm>
@@ -26,21 +26,28 @@ namespace {
 
 // ---- writing -----------------------------------------------------------------------------------
 
-/// PLY names are single words: reject names the header could not hold or that clash with x y z.
-void check_vertex_scalar_names(const std::string& path, const PolygonMesh& mesh) {
-    std::vector<std::string> names = {"x", "y", "z"};
-    for (const auto& scalar : mesh.vertex_scalars) {
-        const std::string& name = scalar.first;
+/// PLY names are single words: reject names the header could not hold or that clash with the
+/// element's other properties (`names`: the reserved ones, x y z or nx ny nz vertex_indices).
+template <class Named>
+void check_property_names(const std::string& path, const char* what, const Named& properties, std::vector<std::string> names) {
+    const std::string reserved = names.size() == 3 ? "x, y and z are the coordinates" : "nx, ny, nz and vertex_indices are taken";
+    for (const auto& property : properties) {
+        const std::string& name = property.first;
         const bool printable = std::all_of(name.begin(), name.end(), [](char c) { return c > ' ' && c < 127; });
         if (name.empty() || !printable) {
-            throw Error(path + ": vertex scalar name '" + name +
+            throw Error(path + ": " + what + " name '" + name +
                         "' cannot be a PLY property name (it must be one word of printable ASCII)");
         }
         if (std::find(names.begin(), names.end(), name) != names.end()) {
-            throw Error(path + ": vertex scalar name '" + name + "' is used twice (x, y and z are the coordinates)");
+            throw Error(path + ": " + what + " name '" + name + "' is used twice (" + reserved + ")");
         }
         names.push_back(name);
     }
+}
+
+void check_vertex_scalar_names(const std::string& path, const PolygonMesh& mesh) {
+    check_property_names(path, "vertex scalar", mesh.vertex_scalars, {"x", "y", "z"});
+    check_property_names(path, "face integer", mesh.face_integers, {"nx", "ny", "nz", "vertex_indices"});
 }
 
 void write_ply_header(OutputBuffer& buffer, const PolygonMesh& mesh) {
@@ -59,6 +66,11 @@ void write_ply_header(OutputBuffer& buffer, const PolygonMesh& mesh) {
     buffer.append_integer(mesh.faces.rows());
     buffer.append("\nproperty list uchar int vertex_indices\n");
     if (mesh.face_normals.rows() > 0) buffer.append("property float nx\nproperty float ny\nproperty float nz\n");
+    for (const auto& integer : mesh.face_integers) {
+        buffer.append("property int ");
+        buffer.append(integer.first);
+        buffer.append('\n');
+    }
     buffer.append("end_header\n");
 }
 
@@ -76,8 +88,9 @@ void write_ply_faces(OutputBuffer& buffer, const PolygonMesh& mesh) {
     for (Eigen::Index f = 0; f < faces.rows(); ++f) {
         buffer.append_little_endian(static_cast<std::uint8_t>(faces.cols()));
         for (Eigen::Index k = 0; k < faces.cols(); ++k) buffer.append_little_endian(faces(f, k));
-        if (!with_normals) continue;
-        for (Eigen::Index c = 0; c < 3; ++c) buffer.append_little_endian(static_cast<float>(mesh.face_normals(f, c)));
+        if (with_normals)
+            for (Eigen::Index c = 0; c < 3; ++c) buffer.append_little_endian(static_cast<float>(mesh.face_normals(f, c)));
+        for (const auto& integer : mesh.face_integers) buffer.append_little_endian(static_cast<std::int32_t>(integer.second[f]));
     }
 }
 
@@ -322,8 +335,10 @@ VertexLayout vertex_layout(const std::string& path, const PlyElement& element) {
 struct FaceLayout {
     static constexpr int skipped = -1;
     static constexpr int indices = 3;
+    static constexpr int first_integer = 4;  ///< roles from here on: face integer (role − first_integer)
     std::vector<int> roles;  ///< 0..2 for nx, ny, nz
     bool with_normals = false;
+    std::vector<std::string> integer_names;
 };
 
 FaceLayout face_layout(const std::string& path, const PlyElement& element) {
@@ -340,6 +355,12 @@ FaceLayout face_layout(const std::string& path, const PlyElement& element) {
             throw Error(path + ": face property '" + name + "' must hold integers");
         }
         has_indices = has_indices || is_index_list;
+        const bool index_name = name == "vertex_indices" || name == "vertex_index";
+        if (!is_index_list && !index_name && axis < 0 && !property.is_list && is_integer_type(property.value_type)) {
+            layout.roles.push_back(FaceLayout::first_integer + int(layout.integer_names.size()));
+            layout.integer_names.push_back(name);
+            continue;
+        }
         layout.roles.push_back(is_index_list ? FaceLayout::indices : axis >= 0 ? axis : FaceLayout::skipped);
     }
     if (!has_indices) throw Error(path + ": element 'face' has no list property 'vertex_indices' or 'vertex_index'");
@@ -530,6 +551,7 @@ public:
         source_.check_end();
         PolygonMesh mesh = make_mesh(std::move(vertices_), faces);
         mesh.vertex_scalars = std::move(scalars_);
+        attach_face_integers(face_roles, faces, mesh);
         return mesh;
     }
 
@@ -566,8 +588,26 @@ private:
         if (!vertices_.row(v).allFinite()) throw Error(source_.where() + ": vertex has a non-finite coordinate");
     }
 
+    /// The face integers of the file, one row per mesh face (a split quad gives its value to
+    /// both its triangles).
+    void attach_face_integers(const FaceLayout& layout, const FaceList& faces, PolygonMesh& mesh) const {
+        const std::size_t count = layout.integer_names.size();
+        if (count == 0) return;
+        const bool split = faces.triangle_count() > 0 && faces.quad_count() > 0;
+        for (std::size_t i = 0; i < count; ++i) {
+            Eigen::VectorXi values(mesh.faces.rows());
+            Eigen::Index row = 0;
+            for (std::size_t f = 0; f < faces.face_count(); ++f) {
+                const int copies = split && faces.sizes()[f] == 4 ? 2 : 1;
+                for (int c = 0; c < copies; ++c) values[row++] = integers_[f * count + i];
+            }
+            mesh.face_integers.emplace_back(layout.integer_names[i], std::move(values));
+        }
+    }
+
     void read_faces(const PlyElement& element, const FaceLayout& layout, FaceList& faces) {
         faces.reserve(static_cast<std::size_t>(element.count));
+        integers_.reserve(static_cast<std::size_t>(element.count) * layout.integer_names.size());
         for (std::uint64_t f = 0; f < element.count; ++f) {
             source_.position = DataPosition{&element, f};
             read_face(element, layout, faces);
@@ -585,6 +625,11 @@ private:
                 size = read_index_list(property, indices);
             } else if (role == FaceLayout::skipped) {
                 skip_property(property);
+            } else if (role >= FaceLayout::first_integer) {
+                const std::int64_t value = source_.read_integer(property.value_type);
+                if (value < INT32_MIN || value > INT32_MAX)
+                    throw Error(source_.where() + ": face property '" + property.name + "' does not fit a 32-bit integer");
+                integers_.push_back(static_cast<std::int32_t>(value));
             } else {
                 normal[static_cast<std::size_t>(role)] = source_.read_number(property.value_type);
             }
@@ -626,6 +671,7 @@ private:
     std::int64_t vertex_count_ = 0;
     PointMatrix vertices_;
     std::vector<std::pair<std::string, Eigen::VectorXd>> scalars_;
+    std::vector<std::int32_t> integers_;  ///< face integers, face-major
 };
 
 template <class Source>

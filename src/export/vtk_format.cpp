@@ -3,14 +3,16 @@
 // Written: "# vtk DataFile Version 4.2" (the version Slicer writes, for the widest
 // compatibility), the header line "dsreg output. SPACE=LPS" (Slicer's vtkMRMLModelStorageNode
 // looks for "SPACE=RAS" / "SPACE=LPS" in this line), BINARY (big-endian), POINTS as double,
-// POLYGONS as counts and indices; CELL_DATA NORMALS "u" when the mesh has face normals, and one
+// POLYGONS as counts and indices; CELL_DATA NORMALS "u" when the mesh has face normals, the face
+// integers (a label complex's inner_label/outer_label) as int arrays of a CELL_DATA FIELD, and one
 // POINT_DATA SCALARS array per vertex scalar.
 // Read: ASCII or BINARY, POINTS of any numeric type, POLYGONS in the 4.2 layout (count then
 // indices per cell) and the 5.1 layout (OFFSETS and CONNECTIVITY arrays), VERTICES and LINES
-// skipped, CELL_DATA NORMALS as face normals, POINT_DATA SCALARS of one component as vertex
-// scalars; other attribute arrays (VECTORS, TEXTURE_COORDINATES, FIELD, ...) are skipped. Every
+// skipped, CELL_DATA NORMALS as face normals, integer CELL_DATA FIELD arrays of one component as
+// face integers, POINT_DATA SCALARS of one component as vertex scalars; other attribute arrays (VECTORS, TEXTURE_COORDINATES, FIELD, ...) are skipped. Every
 // count is checked against the size of the file before memory is allocated for it.
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 
 #include "dsreg/atomic_file.hpp"
@@ -49,13 +51,30 @@ void write_vtk_polydata(OutputBuffer& buffer, const PolygonMesh& mesh) {
         for (Eigen::Index k = 0; k < mesh.faces.cols(); ++k) append_big_endian(buffer, mesh.faces(f, k));
     }
     buffer.append('\n');
-    if (mesh.face_normals.rows() > 0) {
+    if (mesh.face_normals.rows() > 0 || !mesh.face_integers.empty()) {
         buffer.append("CELL_DATA ");
         buffer.append_integer(mesh.faces.rows());
-        buffer.append("\nNORMALS u double\n");
+        buffer.append('\n');
+    }
+    if (mesh.face_normals.rows() > 0) {
+        buffer.append("NORMALS u double\n");
         for (Eigen::Index f = 0; f < mesh.face_normals.rows(); ++f)
             for (int a = 0; a < 3; ++a) append_big_endian(buffer, mesh.face_normals(f, a));
         buffer.append('\n');
+    }
+    if (!mesh.face_integers.empty()) {
+        // A FIELD block: VTK's legacy reader keeps every array of it (of several SCALARS it keeps
+        // only the first unless asked), so 3D Slicer shows each as a cell scalar.
+        buffer.append("FIELD FieldData ");
+        buffer.append_integer(static_cast<std::int64_t>(mesh.face_integers.size()));
+        buffer.append('\n');
+        for (const auto& [name, values] : mesh.face_integers) {
+            buffer.append(name + " 1 ");
+            buffer.append_integer(values.size());
+            buffer.append(" int\n");
+            for (Eigen::Index f = 0; f < values.size(); ++f) append_big_endian(buffer, static_cast<std::int32_t>(values[f]));
+            buffer.append('\n');
+        }
     }
     if (!mesh.vertex_scalars.empty()) {
         buffer.append("POINT_DATA ");
@@ -121,6 +140,7 @@ public:
         if (!has_points_) fail("no POINTS section");
         PolygonMesh mesh = make_mesh(to_point_matrix(coordinates_), faces_);
         mesh.vertex_scalars = std::move(scalars_);
+        mesh.face_integers = std::move(face_integers_);
         return mesh;
     }
 
@@ -340,7 +360,7 @@ private:
                 if (words.size() < 4) fail("TEXTURE_COORDINATES needs a name, a dimension and a data type");
                 read_values(count * count_word(words, 2, "a dimension"), words[3], values);
             } else if (equals_keyword(keyword, "field")) {
-                skip_field(words);
+                read_field(words, cells ? count : 0);
             } else if (equals_keyword(keyword, "metadata")) {
                 skip_metadata();
             } else {
@@ -363,7 +383,11 @@ private:
         face_normal_count_ = faces_.face_count();
     }
 
-    void skip_field(const std::vector<std::string_view>& words) {
+    void skip_field(const std::vector<std::string_view>& words) { read_field(words, 0); }
+
+    /// A FIELD block; in CELL_DATA (`face_count` > 0) its integer arrays of one component and one
+    /// tuple per face become face integers (e.g. the labels of a label complex), the rest is skipped.
+    void read_field(const std::vector<std::string_view>& words, std::uint64_t face_count) {
         const std::uint64_t arrays = count_word(words, 2, "an array count after FIELD");
         for (std::uint64_t a = 0; a < arrays; ++a) {
             const std::vector<std::string_view> array = keyword_line();
@@ -374,7 +398,19 @@ private:
             if (equals_keyword(array[3], "string")) fail("string arrays in FIELD data are not supported");
             std::vector<double> values;
             read_values(components * tuples, array[3], values);
+            if (face_count == 0 || components != 1 || tuples != face_count || is_float_type(array[3])) continue;
+            if (face_count != faces_.face_count()) fail("CELL_DATA count differs from the number of polygons");
+            face_integers_.emplace_back(std::string(array[0]), integer_vector(values));
         }
+    }
+
+    Eigen::VectorXi integer_vector(const std::vector<double>& values) const {
+        Eigen::VectorXi out(static_cast<Eigen::Index>(values.size()));
+        for (std::size_t i = 0; i < values.size(); ++i) {
+            if (!(values[i] >= INT32_MIN && values[i] <= INT32_MAX)) fail("a cell integer does not fit 32 bits");
+            out[static_cast<Eigen::Index>(i)] = static_cast<int>(values[i]);
+        }
+        return out;
     }
 
     void skip_metadata() {
@@ -393,6 +429,7 @@ private:
     FaceList faces_{false};
     std::size_t face_normal_count_ = 0;
     std::vector<std::pair<std::string, Eigen::VectorXd>> scalars_;
+    std::vector<std::pair<std::string, Eigen::VectorXi>> face_integers_;
 };
 
 }  // namespace
@@ -401,6 +438,9 @@ void write_vtk(const std::string& path, const PolygonMesh& mesh) {
     for (const auto& scalar : mesh.vertex_scalars)
         if (scalar.first.empty() || scalar.first.find_first_of(" \t\r\n") != std::string::npos)
             throw Error(path + ": vertex scalar name '" + scalar.first + "' must be a single word");
+    for (const auto& integers : mesh.face_integers)
+        if (integers.first.empty() || integers.first.find_first_of(" \t\r\n") != std::string::npos)
+            throw Error(path + ": face property name '" + integers.first + "' must be a single word");
     write_file_atomically(path, [&](std::ostream& out) {
         OutputBuffer buffer(out);
         write_vtk_polydata(buffer, mesh);

@@ -1,18 +1,21 @@
 // dsreg — VTK XML PolyData (.vtp), 3D Slicer's other model format.
 //
 // Written: one Piece with Points (Float64), Polys (Int64 connectivity and offsets), CellData
-// "u" (the face normals, when present) and one PointData array per vertex scalar, every array in
+// "u" (the face normals, when present), one Int32 CellData array per face integer (a label
+// complex's inner_label/outer_label), one PointData array per vertex scalar, every array in
 // the inline "binary" format (base64 of a UInt64 byte count followed by the values,
 // little-endian), and, when the mesh has a coordinate system, the FieldData string array "SPACE"
 // holding "LPS" or "RAS": where Slicer's vtkMRMLModelStorageNode writes it and looks for it.
 // Read: what VTK's vtkXMLPolyDataWriter writes: ascii, inline binary and appended (raw or base64)
 // arrays, UInt32 or UInt64 headers, uncompressed or vtkZLibDataCompressor blocks, little- or
 // big-endian; one Piece; Verts and Lines skipped, Strips rejected; CellData Normals (or an array
-// named "u") as face normals; PointData arrays of one component as vertex scalars; FieldData
+// named "u") as face normals, other integer CellData arrays of one component as face integers;
+// PointData arrays of one component as vertex scalars; FieldData
 // "SPACE" as the coordinate system. Every size is checked against the file before allocating.
 #include <zlib.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <map>
 
@@ -102,6 +105,11 @@ void write_vtp_polydata(OutputBuffer& buffer, const PolygonMesh& mesh) {
         write_data_array(buffer, "Float64", "u", 3, binary_array<double>([&](std::size_t i) {
                              return mesh.face_normals(static_cast<Eigen::Index>(i / 3), static_cast<Eigen::Index>(i % 3));
                          }, std::size_t(3 * m)));
+    for (const auto& integers : mesh.face_integers) {
+        const auto& values = integers.second;  // not a structured binding: lambdas capture it (clang 14)
+        write_data_array(buffer, "Int32", xml_escaped(integers.first), 1,
+                         binary_array<std::int32_t>([&](std::size_t i) { return values[static_cast<Eigen::Index>(i)]; }, std::size_t(m)));
+    }
     buffer.append("      </CellData>\n      <Points>\n");
     write_data_array(buffer, "Float64", "Points", 3, binary_array<double>([&](std::size_t i) {
                          return mesh.vertices(static_cast<Eigen::Index>(i / 3), static_cast<Eigen::Index>(i % 3));
@@ -480,6 +488,18 @@ private:
         return out;
     }
 
+    /// A named array of one integer component per tuple (a face property when in CellData).
+    static bool is_integer_array(const Array& array) {
+        const auto name = array.attributes.find("Name"), type = array.attributes.find("type");
+        const auto components = array.attributes.find("NumberOfComponents");
+        if (name == array.attributes.end() || type == array.attributes.end()) return false;
+        if (components != array.attributes.end() && components->second != "1") return false;
+        static const char* const integer_types[] = {"Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64"};
+        for (const char* integer : integer_types)
+            if (type->second == integer) return true;
+        return false;
+    }
+
     const Array* find(const std::string& section, const std::string& name) const {
         for (const Array& array : arrays_) {
             const auto found = array.attributes.find("Name");
@@ -550,6 +570,17 @@ private:
             const std::vector<double> scalar = values(array);
             if (scalar.size() != point_count) continue;
             mesh.vertex_scalars.emplace_back(name->second, Eigen::Map<const Eigen::VectorXd>(scalar.data(), Eigen::Index(point_count)));
+        }
+        for (const Array& array : arrays_) {
+            if (array.section != "CellData" || &array == normal_array || !is_integer_array(array)) continue;
+            const std::vector<double> integers = values(array);
+            if (integers.size() != poly_count) continue;
+            Eigen::VectorXi face_values(static_cast<Eigen::Index>(poly_count));
+            for (std::size_t f = 0; f < integers.size(); ++f) {
+                if (!(integers[f] >= INT32_MIN && integers[f] <= INT32_MAX)) xml_.fail("a CellData integer does not fit 32 bits");
+                face_values[static_cast<Eigen::Index>(f)] = static_cast<int>(integers[f]);
+            }
+            mesh.face_integers.emplace_back(array.attributes.at("Name"), std::move(face_values));
         }
         if (const Array* space = find("FieldData", "SPACE")) {
             std::string text;

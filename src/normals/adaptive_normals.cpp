@@ -19,33 +19,36 @@ struct RadiusLevels {
     double max_radius, min_radius;
     int per_octave;
 
-    int count() const { return 1 + int(std::ceil(per_octave * std::log2(max_radius / min_radius) - 1e-9)); }
+    // The tolerance of 1e-6 level: radii that differ by the round-off of the spacing (a float32
+    // affine) get the same level.
+    int count() const { return 1 + int(std::ceil(per_octave * std::log2(max_radius / min_radius) - 1e-6)); }
     double radius(int level) const {
         return level >= count() - 1 ? min_radius : max_radius * std::exp2(-double(level) / per_octave);
     }
     /// The level of the largest radius ≤ r (the smallest radius if r is below it).
     int level_of(double r) const {
         if (!(r < max_radius)) return 0;
-        const int l = int(std::ceil(per_octave * std::log2(max_radius / r) - 1e-9));
+        const int l = int(std::ceil(per_octave * std::log2(max_radius / r) - 1e-6));
         return std::min(std::max(l, 0), count() - 1);
     }
 };
 
 /// II normals at a per-surfel level; a negative level leaves the row at zero (not wanted). One
 /// ball (six stencils) per level used.
-PointMatrix normals_at_levels(const BinaryVolume& volume, const detail::RowRuns& rows, const DigitalSurface& surface,
+PointMatrix normals_at_levels(const VoxelLabels& volume, const detail::RowRuns& rows, const DigitalSurface& surface,
                               const RadiusLevels& levels, const std::vector<int>& level, IntegralInvariantKernel kernel) {
     std::map<int, std::vector<std::int64_t>> faces_of_level;
     for (std::int64_t f = 0; f < surface.face_count(); ++f)
         if (level[std::size_t(f)] >= 0) faces_of_level[level[std::size_t(f)]].push_back(f);
     PointMatrix u = PointMatrix::Zero(surface.face_count(), 3);
     for (const auto& [l, faces] : faces_of_level) {
-        const detail::IntegralInvariantBall ball(volume.grid.spacing, levels.radius(l), kernel);
+        const detail::IntegralInvariantBall ball(volume.grid().spacing, levels.radius(l), kernel);
         const std::int64_t n = std::int64_t(faces.size());
 #pragma omp parallel for schedule(dynamic, 256)
         for (std::int64_t i = 0; i < n; ++i) {
             const std::int64_t f = faces[std::size_t(i)];
-            u.row(f) = ball.normal(volume, rows, surface.surfels[std::size_t(f)]).transpose();
+            u.row(f) = ball.normal(volume.grid().dims, rows, surface.surfels[std::size_t(f)], detail::inner_label(surface, f))
+                           .transpose();
         }
     }
     return u;
@@ -75,7 +78,7 @@ Eigen::RowVector3d extrapolated_normal(const Eigen::RowVector3d& wide, const Eig
 
 /// The extrapolated field where the radius allows (see extrapolated_normal); `pilot` is n(r/√2)
 /// where r = max_radius.
-void extrapolate_field(const BinaryVolume& volume, const detail::RowRuns& rows, const DigitalSurface& surface,
+void extrapolate_field(const VoxelLabels& volume, const detail::RowRuns& rows, const DigitalSurface& surface,
                        const RadiusLevels& levels, const std::vector<int>& level, const PointMatrix& pilot,
                        int pilot_level, const AdaptiveNormalOptions& o, AdaptiveNormalField& field) {
     const std::int64_t m = surface.face_count();
@@ -104,7 +107,7 @@ void extrapolate_field(const BinaryVolume& volume, const detail::RowRuns& rows, 
 /// the surfel; a voxel of noise on a thick part, thin itself, keeps the radius of its
 /// surroundings). The raw reach is at most half of each thickness, so only where the radius
 /// exceeds twice the raw reach (the rings raised it) is the thickness searched for.
-std::vector<int> radius_levels(const BinaryVolume& volume, const DigitalSurface& surface, const ReachMaps& maps,
+std::vector<int> radius_levels(const VoxelLabels& volume, const DigitalSurface& surface, const ReachMaps& maps,
                                const SurfelReach& raw, const SurfelReach& robust, const RadiusLevels& levels,
                                const AdaptiveNormalOptions& o) {
     const std::int64_t m = surface.face_count();
@@ -114,7 +117,7 @@ std::vector<int> radius_levels(const BinaryVolume& volume, const DigitalSurface&
     for (std::int64_t f = 0; f < m; ++f) {
         int l = levels.level_of(o.reach_factor * reach[f]);
         const double r = levels.radius(l);
-        if (r > safe[f] && o.reach_factor * reach[f] < o.max_radius) {
+        if (r > safe[f] * (1 + 1e-9) && o.reach_factor * reach[f] < o.max_radius * (1 - 1e-9)) {  // round-off: no
             const Surfel& s = surface.surfels[std::size_t(f)];
             const Index3 v{s.voxel[0], s.voxel[1], s.voxel[2]};
             Index3 w = v;
@@ -151,7 +154,7 @@ void smooth_field(const DigitalSurface& surface, PointMatrix& u, int steps, doub
 
 }  // namespace
 
-AdaptiveNormalField adaptive_integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface,
+AdaptiveNormalField adaptive_integral_invariant_normals(const VoxelLabels& volume, const DigitalSurface& surface,
                                                         const AdaptiveNormalOptions& o) {
     check_options(o);
     const detail::RowRuns rows = detail::build_row_runs(volume);
@@ -166,7 +169,7 @@ AdaptiveNormalField adaptive_integral_invariant_normals(const BinaryVolume& volu
     const PointMatrix pilot = normals_at_levels(volume, rows, surface, levels,
                                                 std::vector<int>(static_cast<std::size_t>(m), pilot_level), o.kernel);
     AdaptiveNormalField field;
-    field.reach_cap = std::max(o.reach_cap, o.max_radius / o.reach_factor + volume.grid.spacing.maxCoeff());
+    field.reach_cap = std::max(o.reach_cap, o.max_radius / o.reach_factor + volume.grid().spacing.maxCoeff());
     const ReachMaps maps = reach_maps(volume, std::max(field.reach_cap, 0.5 * o.max_radius));
     const SurfelReach raw = surfel_reach(volume, surface, pilot, maps);
     field.reach.inner = max_over_rings(surface, raw.inner, o.reach_rings);

@@ -4,7 +4,7 @@
 // centre c = centre(v) + sign·(s_a/2)·e_a are, relative to v, the same lattice offsets for every
 // surfel of the same direction; an IntegralInvariantBall holds those offsets once per direction,
 // cut into rows with running sums of the kernel weights, and sums a surfel's ball over the runs
-// of object voxels of each row (RowRuns) with two table look-ups per run: O(r²/h²) per surfel.
+// of voxels of one label in each row (RowRuns) with two table look-ups per run: O(r²/h²) per surfel.
 #pragma once
 
 #include <Eigen/Core>
@@ -18,13 +18,19 @@
 
 namespace dsreg::detail {
 
-/// The object voxels of each row (j,k) as runs [first, last] of consecutive x indices.
+/// The labelled voxels of each row (j,k) as runs [first, last] of consecutive x indices with one
+/// label: the object of a binary volume (label 1), or every non-background label of a label map,
+/// so that one pass over the volume serves the indicators of all labels.
 struct RowRuns {
     std::vector<std::int64_t> row_first;  ///< size ny·nz + 1, into `runs`
     std::vector<std::array<std::int32_t, 2>> runs;
+    std::vector<std::uint32_t> labels;  ///< label index of each run
 };
 
-RowRuns build_row_runs(const BinaryVolume& volume);
+RowRuns build_row_runs(const VoxelLabels& volume);
+
+/// The label whose indicator gives face f its normal: its inner label (1 on a binary surface).
+std::uint32_t inner_label(const DigitalSurface& surface, std::int64_t f);
 
 /// Weighted sums over a prefix of a stencil row: Σ w, Σ w·t, Σ w·t².
 struct RowSums {
@@ -52,9 +58,10 @@ public:
     IntegralInvariantBall(const Eigen::Vector3d& spacing, double radius, IntegralInvariantKernel kernel);
 
     /// The normal of surfel s: eigenvector of the smallest eigenvalue of the weighted covariance
-    /// of the object voxel centres in its ball, oriented from their centroid towards the surfel
-    /// centre (the trivial normal when the ball holds no weight).
-    Eigen::Vector3d normal(const BinaryVolume& volume, const RowRuns& rows, const Surfel& s) const;
+    /// of the centres of the voxels of `label` in its ball (rows of a grid of `dims`), oriented
+    /// from their centroid towards the surfel centre (the trivial normal when the ball holds no
+    /// weight).
+    Eigen::Vector3d normal(const Index3& dims, const RowRuns& rows, const Surfel& s, std::uint32_t label) const;
 
     double radius() const { return radius_; }
 

@@ -19,19 +19,23 @@ namespace dsreg {
 
 namespace detail {
 
-RowRuns build_row_runs(const BinaryVolume& volume) {
-    const auto& d = volume.grid.dims;
+RowRuns build_row_runs(const VoxelLabels& volume) {
+    const Index3& d = volume.grid().dims;
     const std::int64_t rows = d[1] * d[2];
     std::vector<std::vector<std::array<std::int32_t, 2>>> per_row(static_cast<std::size_t>(rows));
+    std::vector<std::vector<std::uint32_t>> per_row_labels(static_cast<std::size_t>(rows));
 #pragma omp parallel for schedule(static)
     for (std::int64_t row = 0; row < rows; ++row) {
-        const std::uint8_t* x = volume.mask.data() + row * d[0];
         auto& out = per_row[static_cast<std::size_t>(row)];
+        auto& out_labels = per_row_labels[static_cast<std::size_t>(row)];
+        const std::int64_t first = row * d[0];
         for (std::int64_t i = 0; i < d[0]; ++i) {
-            if (!x[i]) continue;
+            const std::uint32_t label = volume.at_linear(first + i);
+            if (label == 0) continue;
             std::int64_t last = i;
-            while (last + 1 < d[0] && x[last + 1]) ++last;
+            while (last + 1 < d[0] && volume.at_linear(first + last + 1) == label) ++last;
             out.push_back({std::int32_t(i), std::int32_t(last)});
+            out_labels.push_back(label);
             i = last;
         }
     }
@@ -40,7 +44,11 @@ RowRuns build_row_runs(const BinaryVolume& volume) {
     for (std::int64_t row = 0; row < rows; ++row)
         result.row_first[std::size_t(row + 1)] = result.row_first[std::size_t(row)] + std::int64_t(per_row[std::size_t(row)].size());
     result.runs.reserve(static_cast<std::size_t>(result.row_first.back()));
-    for (const auto& r : per_row) result.runs.insert(result.runs.end(), r.begin(), r.end());
+    result.labels.reserve(static_cast<std::size_t>(result.row_first.back()));
+    for (std::size_t row = 0; row < per_row.size(); ++row) {
+        result.runs.insert(result.runs.end(), per_row[row].begin(), per_row[row].end());
+        result.labels.insert(result.labels.end(), per_row_labels[row].begin(), per_row_labels[row].end());
+    }
     return result;
 }
 
@@ -106,8 +114,9 @@ struct LatticeMoments {
     double stt = 0, sjj = 0, skk = 0, stj = 0, stk = 0, sjk = 0;  // second moments
 };
 
-LatticeMoments ball_moments(const BinaryVolume& volume, const RowRuns& rows, const Surfel& s, const Stencil& stencil) {
-    const auto& d = volume.grid.dims;
+/// The moments of the voxels of `label` in the ball of surfel s.
+LatticeMoments ball_moments(const Index3& d, const RowRuns& rows, const Surfel& s, std::uint32_t label,
+                            const Stencil& stencil) {
     const std::int64_t i0 = s.voxel[0], j0 = s.voxel[1], k0 = s.voxel[2];
     LatticeMoments m;
     for (const StencilRow& row : stencil.rows) {
@@ -117,6 +126,7 @@ LatticeMoments ball_moments(const BinaryVolume& volume, const RowRuns& rows, con
         const RowSums* prefix = stencil.prefix_sums.data() + row.prefix;
         RowSums sum;
         for (std::int64_t q = rows.row_first[std::size_t(id)]; q < rows.row_first[std::size_t(id + 1)]; ++q) {
+            if (rows.labels[std::size_t(q)] != label) continue;
             const auto& run = rows.runs[std::size_t(q)];
             const std::int64_t lo = std::max<std::int64_t>(run[0] - i0, row.t_lo);
             const std::int64_t hi = std::min<std::int64_t>(run[1] - i0, row.t_hi);
@@ -201,40 +211,49 @@ IntegralInvariantBall::IntegralInvariantBall(const Eigen::Vector3d& spacing, dou
             stencils_[axis][side] = ball_stencil(spacing, axis, side ? 1 : -1, radius, kernel);
 }
 
-Eigen::Vector3d IntegralInvariantBall::normal(const BinaryVolume& volume, const RowRuns& rows, const Surfel& s) const {
-    const LatticeMoments m = ball_moments(volume, rows, s, stencils_[s.axis][s.sign > 0 ? 1 : 0]);
+Eigen::Vector3d IntegralInvariantBall::normal(const Index3& dims, const RowRuns& rows, const Surfel& s,
+                                              std::uint32_t label) const {
+    const LatticeMoments m = ball_moments(dims, rows, s, label, stencils_[s.axis][s.sign > 0 ? 1 : 0]);
     return normal_from_moments(m, s, spacing_);
+}
+
+std::uint32_t inner_label(const DigitalSurface& surface, std::int64_t f) {
+    return surface.face_labels.empty() ? 1u : surface.face_labels[std::size_t(f)].inner;
 }
 
 }  // namespace detail
 
 namespace {
 
-/// The field for one radius, from row runs built once by the caller.
-PointMatrix normals_from_runs(const BinaryVolume& volume, const RowRuns& rows, const DigitalSurface& surface,
+/// The field for one radius, from row runs built once by the caller: each face gets the normal
+/// of the indicator of its inner label (the object of a binary volume).
+PointMatrix normals_from_runs(const VoxelGrid& grid, const RowRuns& rows, const DigitalSurface& surface,
                               double radius, IntegralInvariantKernel kernel) {
-    const detail::IntegralInvariantBall ball(volume.grid.spacing, radius, kernel);
+    const detail::IntegralInvariantBall ball(grid.spacing, radius, kernel);
     PointMatrix u(surface.face_count(), 3);
 #pragma omp parallel for schedule(dynamic, 256)
     for (std::int64_t f = 0; f < surface.face_count(); ++f)
-        u.row(f) = ball.normal(volume, rows, surface.surfels[std::size_t(f)]).transpose();
+        u.row(f) = ball.normal(grid.dims, rows, surface.surfels[std::size_t(f)], detail::inner_label(surface, f)).transpose();
     return u;
 }
 
 }  // namespace
 
-PointMatrix integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface, double radius,
-                                       IntegralInvariantKernel kernel) {
-    return normals_from_runs(volume, detail::build_row_runs(volume), surface, radius, kernel);
+namespace {
+
+/// A label map's complex must say which label each face bounds (a binary surface may leave it
+/// empty: its faces all bound the object, label 1).
+void check_surface_labels(const DigitalSurface& surface) {
+    if (std::int64_t(surface.face_labels.size()) != surface.face_count())
+        throw Error("integral invariants: the surface has no face labels (it was not made by extract_digital_surface)");
 }
 
-PointMatrix extrapolated_integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface,
-                                                    double radius, IntegralInvariantKernel kernel) {
+PointMatrix extrapolated_from_runs(const VoxelGrid& grid, const RowRuns& rows, const DigitalSurface& surface,
+                                   double radius, IntegralInvariantKernel kernel) {
     // n(r) = n0 + b·r² + O(r⁴) (b: the curvature variation across the ball), so with
     // r' = r/√2, 2·n(r') − n(r) = n0 + O(r⁴): Richardson extrapolation to r = 0.
-    const RowRuns rows = detail::build_row_runs(volume);  // one pass over the volume for both radii
-    const PointMatrix wide = normals_from_runs(volume, rows, surface, radius, kernel);
-    const PointMatrix narrow = normals_from_runs(volume, rows, surface, radius / std::sqrt(2.0), kernel);
+    const PointMatrix wide = normals_from_runs(grid, rows, surface, radius, kernel);
+    const PointMatrix narrow = normals_from_runs(grid, rows, surface, radius / std::sqrt(2.0), kernel);
     const double agreement = std::cos(30.0 * M_PI / 180.0);
     PointMatrix u(surface.face_count(), 3);
 #pragma omp parallel for schedule(static)
@@ -248,6 +267,85 @@ PointMatrix extrapolated_integral_invariant_normals(const BinaryVolume& volume, 
         u.row(f) = (2.0 * narrow.row(f) - wide.row(f)).normalized();
     }
     return u;
+}
+
+}  // namespace
+
+namespace {
+
+/// Whether the ball of surfel s (its stencil rows) holds a voxel whose label is neither `a` nor
+/// `b`: a run of another label, or background (a gap in a row, or a row leaving the grid) when
+/// neither is the background.
+bool ball_holds_third_label(const Index3& d, const RowRuns& rows, const Surfel& s, std::uint32_t a, std::uint32_t b,
+                            const Stencil& stencil) {
+    const bool background_is_own = a == 0 || b == 0;
+    const std::int64_t i0 = s.voxel[0], j0 = s.voxel[1], k0 = s.voxel[2];
+    for (const StencilRow& row : stencil.rows) {
+        const std::int64_t j = j0 + row.dj, k = k0 + row.dk;
+        const std::int64_t lo = i0 + row.t_lo, hi = i0 + row.t_hi;
+        if (j < 0 || k < 0 || j >= d[1] || k >= d[2] || lo < 0 || hi >= d[0]) {
+            if (!background_is_own) return true;
+            if (j < 0 || k < 0 || j >= d[1] || k >= d[2]) continue;
+        }
+        const std::int64_t id = j + d[1] * k;
+        std::int64_t covered_to = std::max<std::int64_t>(lo, 0);  // first x not yet seen covered
+        for (std::int64_t q = rows.row_first[std::size_t(id)]; q < rows.row_first[std::size_t(id + 1)]; ++q) {
+            const auto& run = rows.runs[std::size_t(q)];
+            if (run[1] < lo) continue;
+            if (run[0] > hi) break;
+            const std::uint32_t label = rows.labels[std::size_t(q)];
+            if (label != a && label != b) return true;
+            if (run[0] > covered_to && !background_is_own) return true;  // a background gap
+            covered_to = std::max<std::int64_t>(covered_to, std::int64_t(run[1]) + 1);
+        }
+        if (covered_to <= std::min<std::int64_t>(hi, d[0] - 1) && !background_is_own) return true;
+    }
+    return false;
+}
+
+}  // namespace
+
+std::vector<char> faces_near_junctions(const LabelVolume& volume, const DigitalSurface& surface, double radius) {
+    check_surface_labels(surface);
+    if (!(radius > 0) || !std::isfinite(radius))
+        throw Error("junction radius must be positive and finite (got " + std::to_string(radius) + ")");
+    std::vector<char> near(static_cast<std::size_t>(surface.face_count()), 0);
+    if (volume.label_count() <= 2) return near;  // a binary label map has no third label
+    const RowRuns rows = detail::build_row_runs(volume);
+    Stencil stencils[3][2];
+    for (int axis = 0; axis < 3; ++axis)
+        for (int side = 0; side < 2; ++side)
+            stencils[axis][side] = ball_stencil(volume.grid.spacing, axis, side ? 1 : -1, radius, IntegralInvariantKernel::ball);
+#pragma omp parallel for schedule(dynamic, 256)
+    for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+        const Surfel& s = surface.surfels[std::size_t(f)];
+        const FaceLabels& l = surface.face_labels[std::size_t(f)];
+        near[std::size_t(f)] =
+            ball_holds_third_label(volume.grid.dims, rows, s, l.inner, l.outer, stencils[s.axis][s.sign > 0 ? 1 : 0]) ? 1 : 0;
+    }
+    return near;
+}
+
+PointMatrix integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface, double radius,
+                                       IntegralInvariantKernel kernel) {
+    return normals_from_runs(volume.grid, detail::build_row_runs(volume), surface, radius, kernel);
+}
+
+PointMatrix integral_invariant_normals(const LabelVolume& volume, const DigitalSurface& surface, double radius,
+                                       IntegralInvariantKernel kernel) {
+    check_surface_labels(surface);
+    return normals_from_runs(volume.grid, detail::build_row_runs(volume), surface, radius, kernel);  // one pass, all labels
+}
+
+PointMatrix extrapolated_integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface,
+                                                    double radius, IntegralInvariantKernel kernel) {
+    return extrapolated_from_runs(volume.grid, detail::build_row_runs(volume), surface, radius, kernel);  // runs once for both radii
+}
+
+PointMatrix extrapolated_integral_invariant_normals(const LabelVolume& volume, const DigitalSurface& surface,
+                                                    double radius, IntegralInvariantKernel kernel) {
+    check_surface_labels(surface);
+    return extrapolated_from_runs(volume.grid, detail::build_row_runs(volume), surface, radius, kernel);
 }
 
 }  // namespace dsreg

@@ -51,6 +51,32 @@ void check_choices(const NormalFieldOptions& o) {
     parse_integral_invariant_kernel(o.ii_kernel);
 }
 
+/// On a label map's complex, the convolved trivial normals of the face's own interface near
+/// junctions (within `radius`; docs/multi-label.md) in place of the integral invariants `u`.
+void use_interface_normals(const LoadedVolume& loaded, const DigitalSurface& surface, double radius, PointMatrix& u,
+                           NormalField& field) {
+    if (!loaded.labels) return;
+    field.interface_normal_faces = use_interface_normals_near_junctions(*loaded.labels, surface, radius, u);
+    if (field.interface_normal_faces > 0)
+        field.description += "; interface normals on the " + std::to_string(field.interface_normal_faces) +
+                             " faces near junctions";
+}
+
+/// The adaptive field (adaptive_normals.hpp) of the object or of each face's inner label.
+PointMatrix adaptive_field(const NormalFieldOptions& o, const LoadedVolume& loaded, const DigitalSurface& surface,
+                           NormalField& field) {
+    const AdaptiveNormalOptions adaptive = default_adaptive_options(o, loaded);
+    field.ii_kernel = o.ii_kernel;
+    field.adaptive = adaptive_integral_invariant_normals(loaded.voxel_labels(), surface, adaptive);
+    const Eigen::VectorXd& r = field.adaptive->radius;
+    field.description = "adaptive integral invariants (" + o.ii_kernel + " kernel), r = " + format("%g", r.minCoeff()) +
+                        " to " + format("%g", r.maxCoeff()) + " (mean " + format("%.3g", r.mean()) + "), " +
+                        format("%.1f", 100.0 * field.adaptive->extrapolated.mean()) + " % extrapolated";
+    PointMatrix u = field.adaptive->normals;
+    use_interface_normals(loaded, surface, default_field_radius(o, "ii", loaded), u, field);
+    return u;
+}
+
 /// The input field g (or the whole field, without AT).
 PointMatrix estimate_input_field(const NormalFieldOptions& o, const LoadedVolume& loaded, const DigitalSurface& surface,
                                  NormalField& field) {
@@ -60,16 +86,7 @@ PointMatrix estimate_input_field(const NormalFieldOptions& o, const LoadedVolume
         field.description = "file " + o.file;
         return read_normals_file(o.file, surface);
     }
-    if (kind == "ii" && !o.radius && !o.ii_extrapolate) {
-        const AdaptiveNormalOptions adaptive = default_adaptive_options(o, loaded);
-        field.ii_kernel = o.ii_kernel;
-        field.adaptive = adaptive_integral_invariant_normals(loaded.volume, surface, adaptive);
-        const Eigen::VectorXd& r = field.adaptive->radius;
-        field.description = "adaptive integral invariants (" + o.ii_kernel + " kernel), r = " + format("%g", r.minCoeff()) +
-                            " to " + format("%g", r.maxCoeff()) + " (mean " + format("%.3g", r.mean()) + "), " +
-                            format("%.1f", 100.0 * field.adaptive->extrapolated.mean()) + " % extrapolated";
-        return field.adaptive->normals;
-    }
+    if (kind == "ii" && !o.radius && !o.ii_extrapolate) return adaptive_field(o, loaded, surface, field);
     if (kind == "ii" || kind == "ctrivial") {
         field.radius = o.radius ? *o.radius : default_field_radius(o, kind, loaded);
         const std::string r = ", r = " + format("%g", *field.radius);
@@ -80,12 +97,17 @@ PointMatrix estimate_input_field(const NormalFieldOptions& o, const LoadedVolume
         field.ii_kernel = o.ii_kernel;
         field.ii_extrapolated = o.ii_extrapolate;
         const IntegralInvariantKernel kernel = parse_integral_invariant_kernel(o.ii_kernel);
-        if (o.ii_extrapolate) {
-            field.description = "integral invariants (" + o.ii_kernel + " kernel), extrapolated from r and r/sqrt(2)" + r;
-            return extrapolated_integral_invariant_normals(loaded.volume, surface, *field.radius, kernel);
-        }
-        field.description = "integral invariants (" + o.ii_kernel + " kernel)" + r;
-        return integral_invariant_normals(loaded.volume, surface, *field.radius, kernel);
+        field.description = "integral invariants (" + o.ii_kernel + " kernel)" +
+                            (o.ii_extrapolate ? ", extrapolated from r and r/sqrt(2)" : "") + r;
+        PointMatrix u;
+        if (loaded.labels)
+            u = o.ii_extrapolate ? extrapolated_integral_invariant_normals(*loaded.labels, surface, *field.radius, kernel)
+                                 : integral_invariant_normals(*loaded.labels, surface, *field.radius, kernel);
+        else
+            u = o.ii_extrapolate ? extrapolated_integral_invariant_normals(loaded.volume, surface, *field.radius, kernel)
+                                 : integral_invariant_normals(loaded.volume, surface, *field.radius, kernel);
+        use_interface_normals(loaded, surface, *field.radius, u, field);
+        return u;
     }
     if (kind == "exact") {
         field.description = "exact normals";

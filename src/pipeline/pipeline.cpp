@@ -1,7 +1,9 @@
 // dsreg pipeline — run_pipeline and its outputs (include/dsreg/pipeline.hpp).
 #include "dsreg/pipeline.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <numeric>
 #include <sstream>
 
@@ -41,11 +43,11 @@ void check_weight_flags(const PipelineOptions& o) {
 
 /// The faces' reach for the thin-part data weights (empty when --alpha-reach 0): the adaptive
 /// field's, else measured along the field used.
-Eigen::VectorXd thin_part_reach(const RegularizationExtensions& o, const BinaryVolume& volume,
+Eigen::VectorXd thin_part_reach(const RegularizationExtensions& o, const VoxelLabels& volume,
                                 const DigitalSurface& surface, const NormalField& field) {
-    const double reference = alpha_reach(o, volume.grid);
+    const double reference = alpha_reach(o, volume.grid());
     if (reference <= 0) return {};
-    const double cap = reference + volume.grid.spacing.maxCoeff();
+    const double cap = reference + volume.grid().spacing.maxCoeff();
     if (field.adaptive && field.adaptive->reach_cap >= cap) return field.adaptive->reach.smallest();
     SurfelReach reach = surfel_reach(volume, surface, field.normals, cap);
     return max_over_rings(surface, reach.smallest(), AdaptiveNormalOptions{}.reach_rings);
@@ -116,6 +118,21 @@ void check_and_repair(const PipelineOptions& o, PipelineResult& result, StageClo
     result.validity = repaired.report;
     clock.finish(validity_text(*result.validity, result.weights));
 }
+std::int64_t labelled_voxels(const LabelVolume& labels) {
+    return static_cast<std::int64_t>(std::count_if(labels.labels.begin(), labels.labels.end(), [](std::uint32_t l) { return l != 0; }));
+}
+
+/// Each label's closed surface and its measures, at the regularized positions (stage "labels").
+void measure_labels(const LabelVolume& labels, PipelineResult& result) {
+    result.label_meshes = label_meshes(result.surface);
+    const std::vector<std::int64_t> voxels = labels.voxel_counts();
+    for (const LabelMesh& mesh : result.label_meshes)
+        result.label_measures.push_back(
+            measure_label(result.surface, mesh, result.regularization.positions, voxels[mesh.label]));
+    result.junctions = find_junctions(result.surface, complex_edges(result.surface));
+}
+
+std::string label_text(std::size_t count) { return std::to_string(count) + (count == 1 ? " label" : " labels"); }
 
 /// Stages 2–4 on a loaded volume; `clock` may already hold the read stage.
 PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, StageClock& clock) {
@@ -124,11 +141,12 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
     result.grid = loaded.volume.grid;
     result.file = loaded.file;
     result.warnings = loaded.warnings;
-    result.object_voxels = loaded.volume.object_voxel_count();
+    result.object_voxels = loaded.labels ? labelled_voxels(*loaded.labels) : loaded.volume.object_voxel_count();
     if (result.object_voxels == 0) throw Error(loaded.description + ": the object is empty");
 
     clock.start("surface");
-    result.surface = extract_digital_surface(loaded.volume, o.connectivity);
+    result.surface = loaded.labels ? extract_digital_surface(*loaded.labels, o.connectivity)
+                                   : extract_digital_surface(loaded.volume, o.connectivity);
     clock.finish(std::to_string(result.surface.face_count()) + " surfels, " +
                  std::to_string(result.surface.vertex_count()) + " vertices, " +
                  component_text(result.surface.component_count));
@@ -138,7 +156,7 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
     clock.start("regularize");
     result.weights = global_weights(o);
     apply_regularization_extensions(o.extensions, result.surface, result.field.normals,
-                                    thin_part_reach(o.extensions, loaded.volume, result.surface, result.field),
+                                    thin_part_reach(o.extensions, loaded.voxel_labels(), result.surface, result.field),
                                     result.weights);
     SolverOptions solver;
     solver.kind = o.solver;
@@ -147,11 +165,87 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
                                                result.weights, solver, result.extension_report);
     clock.finish(result.regularization.solve.solver + ", relative residual " +
                  format("%.2e", result.regularization.solve.relative_residual));
-    if (o.validity != ValidityMode::Off) check_and_repair(o, result, clock);
+    // The check and repair are made for closed manifolds; a label complex is not one along its
+    // junctions, so label maps skip them (docs/multi-label.md).
+    if (o.validity != ValidityMode::Off && !loaded.labels) check_and_repair(o, result, clock);
     result.faces_against_field =
         count_faces_against_field(result.regularization.positions, result.surface.quads, result.field.normals);
+    if (loaded.labels) {
+        clock.start("labels");
+        measure_labels(*loaded.labels, result);
+        clock.finish(label_text(result.label_meshes.size()) + ", " + std::to_string(result.junctions.vertex_count) +
+                     " junction vertices");
+    }
     result.stage_seconds = clock.stage_seconds();
     return result;
+}
+
+void check_label_values_fit(const DigitalSurface& surface) {
+    for (const std::int64_t value : surface.label_values)
+        if (value < INT32_MIN || value > INT32_MAX)
+            throw Error("label " + std::to_string(value) + " does not fit the 32-bit face properties of the output");
+}
+
+/// The complex with the labels on either side of each face (values, not indices).
+void add_face_labels(const DigitalSurface& surface, PolygonMesh& mesh) {
+    const std::int64_t m = surface.face_count();
+    Eigen::VectorXi inner(m), outer(m);
+    for (std::int64_t f = 0; f < m; ++f) {
+        inner[f] = static_cast<int>(surface.label_values[surface.face_labels[std::size_t(f)].inner]);
+        outer[f] = static_cast<int>(surface.label_values[surface.face_labels[std::size_t(f)].outer]);
+    }
+    mesh.face_integers.emplace_back("inner_label", std::move(inner));
+    mesh.face_integers.emplace_back("outer_label", std::move(outer));
+}
+
+/// A mesh of the grid frame in --space, tagged with its coordinate system when the input file
+/// has a world geometry.
+PolygonMesh mesh_for_output(PolygonMesh mesh, const PipelineResult& result, const PipelineOutputs& outputs) {
+    mesh = mesh_in_space(std::move(mesh), result.grid, outputs.space);
+    if (!result.file.world_geometry) mesh.coordinate_system.clear();  // shapes, DGtal files: no world frame to name
+    return mesh;
+}
+
+/// Every label's surface, next to -o.
+void write_label_meshes(const PipelineResult& result, const PipelineOutputs& outputs, const ProgressCallback& progress) {
+    const std::size_t count = result.label_meshes.size();
+    for (std::size_t i = 0; i < count; ++i) {
+        const LabelMesh& mesh = result.label_meshes[i];
+        const PolygonMesh polygons = label_polygon_mesh(mesh, result.regularization.positions, result.field.normals);
+        write_mesh(label_output_path(outputs.mesh, result.surface.label_values[mesh.label]),
+                   mesh_for_output(outputs.triangulate ? triangulate_shorter_diagonal(polygons) : polygons, result, outputs));
+        report_progress(progress, "write", double(i + 1) / double(count));
+    }
+}
+
+/// The outputs of a run and their flags, label meshes included, for the distinctness check.
+std::vector<std::pair<std::string, std::string>> all_outputs(const PipelineResult& result, const PipelineOutputs& o) {
+    std::vector<std::pair<std::string, std::string>> outputs = {{"-o", o.mesh},
+                                                                {"--input-mesh", o.input_mesh},
+                                                                {"--report", o.report},
+                                                                {"--export-normals", o.normals},
+                                                                {"--features", o.features},
+                                                                {"--html", o.html}};
+    for (const LabelMesh& mesh : result.label_meshes) {
+        const std::int64_t value = result.surface.label_values[mesh.label];
+        outputs.emplace_back("the surface of label " + std::to_string(value), label_output_path(o.mesh, value));
+    }
+    return outputs;
+}
+
+nlohmann::json label_json(const LabelMeasures& m, const std::string& path) {
+    return {{"label", m.value},
+            {"faces", m.faces},
+            {"vertices", m.vertices},
+            {"area", m.area},
+            {"volume", m.volume},
+            {"voxel_volume", m.voxel_volume},
+            {"volume_ratio", m.voxel_volume > 0 ? m.volume / m.voxel_volume : 0.0},
+            {"components", m.components},
+            {"genus", m.genus},
+            {"euler_characteristics", m.euler_characteristics},
+            {"pinch_vertices", m.pinch_vertices},
+            {"mesh", path}};
 }
 
 nlohmann::json optional_json(const std::optional<double>& value) {
@@ -196,8 +290,29 @@ void check_pipeline_options(const PipelineOptions& o, bool input_is_shape) {
     check_regularization_extensions(o.extensions);
 }
 
+namespace {
+
+/// The checks of check_multi_label_options that only need the options.
+void check_label_map_options(const PipelineOptions& o) {
+    const std::string kind = o.normals.kind.empty() ? "ii" : o.normals.kind;
+    if (kind != "ii" && kind != "trivial")
+        throw Error("--normals " + kind + " does not apply to --multi-label (use ii, trivial or --normals-file)");
+    if (o.extensions.clamp) throw Error("--clamp does not apply to --multi-label");
+}
+
+}  // namespace
+
+void check_multi_label_options(const VolumeSource& source, const PipelineOptions& o) {
+    if (!source.is_multi_label()) return;
+    if (source.min_value || source.max_value || source.label)
+        throw Error(std::string(source.label ? "--label" : source.min_value ? "--min" : "--max") +
+                    " chooses one object; with --multi-label every non-zero value is a label (choose some with --labels)");
+    check_label_map_options(o);
+}
+
 PipelineResult run_pipeline(const LoadedVolume& loaded, const PipelineOptions& options, const ProgressCallback& progress) {
     check_pipeline_options(options, loaded.shape.has_value());
+    if (loaded.labels) check_label_map_options(options);
     StageClock clock(progress);
     return run_stages(loaded, options, clock);
 }
@@ -205,14 +320,17 @@ PipelineResult run_pipeline(const LoadedVolume& loaded, const PipelineOptions& o
 PipelineResult run_pipeline(const VolumeSource& source, const PipelineOptions& options, const ProgressCallback& progress) {
     if (!source.max_memory.empty()) parse_memory_size("--max-memory", source.max_memory);
     check_pipeline_options(options, !source.shape.empty());
+    check_multi_label_options(source, options);
     StageClock clock(progress);
     clock.start(source.shape.empty() ? "read" : "digitize");
     const LoadedVolume loaded = load_volume(source);
-    clock.finish(std::to_string(loaded.volume.object_voxel_count()) + " object voxels");
+    clock.finish(loaded.labels ? std::to_string(labelled_voxels(*loaded.labels)) + " labelled voxels"
+                               : std::to_string(loaded.volume.object_voxel_count()) + " object voxels");
     if (!source.max_memory.empty()) {
         // Before anything proportional to the surface is allocated: count its surfels (one pass).
         const bool factorization = options.solver == SolverKind::Cholmod || options.solver == SolverKind::Auto;
-        check_run_memory(source, loaded.volume.grid.voxel_count(), count_surfels(loaded.volume), factorization);
+        check_run_memory(source, loaded.volume.grid.voxel_count(),
+                         loaded.labels ? count_surfels(*loaded.labels) : count_surfels(loaded.volume), factorization);
     }
     PipelineOptions with_maps = options;  // local weight maps are read like the input
     if (source.raw_layout) with_maps.extensions.map_raw_layout = *source.raw_layout;
@@ -226,13 +344,19 @@ PolygonMesh result_mesh(const PipelineResult& result, bool triangulate, bool dig
     mesh.faces = result.surface.quads;
     mesh.face_normals = result.field.normals;
     if (result.field.at) mesh.vertex_scalars.emplace_back("v", result.field.at->features);
+    if (!result.label_meshes.empty()) add_face_labels(result.surface, mesh);
     return triangulate ? triangulate_shorter_diagonal(mesh) : mesh;
 }
 
+std::string label_output_path(const std::string& mesh_path, std::int64_t value) {
+    const std::filesystem::path path(mesh_path);
+    std::filesystem::path out = path.parent_path() / (path.stem().string() + "-" + std::to_string(value));
+    out += path.extension();
+    return out.string();
+}
+
 PolygonMesh output_mesh(const PipelineResult& result, const PipelineOutputs& outputs, bool digital) {
-    PolygonMesh mesh = mesh_in_space(result_mesh(result, outputs.triangulate, digital), result.grid, outputs.space);
-    if (!result.file.world_geometry) mesh.coordinate_system.clear();  // shapes, DGtal files: no world frame to name
-    return mesh;
+    return mesh_for_output(result_mesh(result, outputs.triangulate, digital), result, outputs);
 }
 
 void check_pipeline_outputs(const PipelineOutputs& o) {
@@ -258,15 +382,27 @@ void write_pipeline_outputs(PipelineResult& result, const PipelineOptions& optio
                             const VolumeSource& source, const ProgressCallback& progress) {
     StageClock clock(progress);
     clock.start("write");
-    if (!outputs.mesh.empty()) write_mesh(outputs.mesh, output_mesh(result, outputs));
+    if (!result.label_meshes.empty()) {
+        check_label_values_fit(result.surface);
+        check_distinct_outputs(all_outputs(result, outputs));  // before anything is written
+    }
+    if (!outputs.mesh.empty()) {
+        write_mesh(outputs.mesh, output_mesh(result, outputs));
+        write_label_meshes(result, outputs, progress);  // next to -o
+    }
     if (!outputs.input_mesh.empty()) write_mesh(outputs.input_mesh, output_mesh(result, outputs, true));
     if (!outputs.normals.empty())
         write_normals_file(outputs.normals, result.surface, result.field.normals, result.field.description);
     if (!outputs.features.empty())
         write_feature_lines(outputs.features, options.normals, result.field, result.surface,
                             map_points(grid_to_space(result.grid, outputs.space), result.regularization.positions));
+    std::string written = outputs.mesh;
+    if (!result.label_meshes.empty() && !outputs.mesh.empty())
+        written += " and " + label_text(result.label_meshes.size()) + " (" +
+                   label_output_path(outputs.mesh, result.surface.label_values[result.label_meshes.front().label]) +
+                   (result.label_meshes.size() > 1 ? ", ...)" : ")");
     if (!outputs.html.empty()) write_html_view(outputs.html, result_page(result, options));
-    clock.finish(outputs.mesh);
+    clock.finish(written);
     result.stage_seconds.push_back(clock.stage_seconds().back());
     if (outputs.report.empty()) return;
     const std::string text = pipeline_report(result, options, outputs, source).dump(2) + "\n";
@@ -341,6 +477,20 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
     report["peak_memory_bytes"] = peak_memory_bytes();
     report["outputs"] = {{"mesh", outputs.mesh}, {"input_mesh", outputs.input_mesh},
                          {"normals", outputs.normals}, {"features", outputs.features}, {"html", outputs.html}};
+    if (!r.label_meshes.empty()) {
+        nlohmann::json labels = nlohmann::json::array();
+        for (const LabelMeasures& m : r.label_measures) labels.push_back(label_json(m, label_output_path(outputs.mesh, m.value)));
+        report["labels"] = labels;
+        std::int64_t pinches = 0;
+        for (const LabelMeasures& m : r.label_measures) pinches += m.pinch_vertices;
+        report["label_complex"] = {{"labels", r.label_meshes.size()},
+                                   {"junction_vertices", r.junctions.vertex_count},
+                                   {"junction_points", r.junctions.point_count},
+                                   {"junction_edges", r.junctions.edge_count},
+                                   {"interface_normal_faces", field.interface_normal_faces},
+                                   {"pinch_vertices", pinches}};
+        report["parameters"]["multi_label"] = true;
+    }
     report.update(r.extension_report);
     return report;
 }
@@ -349,7 +499,10 @@ std::string summary_line(const PipelineResult& r, const PipelineOptions& o) {
     const RegularizationResult& reg = r.regularization;
     std::ostringstream line;
     line << r.input << ": " << r.surface.face_count() << " surfels, " << r.surface.vertex_count() << " vertices, "
-         << component_text(r.surface.component_count) << "; energy " << format("%.4g", reg.energy_before.total(r.weights))
+         << component_text(r.surface.component_count);
+    if (!r.label_meshes.empty())
+        line << ", " << label_text(r.label_meshes.size()) << ", " << r.junctions.vertex_count << " junction vertices";
+    line << "; energy " << format("%.4g", reg.energy_before.total(r.weights))
          << " -> " << format("%.4g", reg.energy_after.total(r.weights)) << "; " << reg.solve.solver << " residual "
          << format("%.1e", reg.solve.relative_residual);
     if (r.validity)

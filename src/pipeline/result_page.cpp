@@ -34,6 +34,9 @@ std::vector<SummaryLine> run_summary(const PipelineResult& r, const PipelineOpti
         {"energy", format("%.4g", reg.energy_before.total(r.weights)) + " → " +
                        format("%.4g", reg.energy_after.total(r.weights))},
     };
+    if (!r.label_meshes.empty())
+        lines.push_back({"labels", std::to_string(r.label_meshes.size()) + ", " + std::to_string(r.junctions.vertex_count) +
+                                       " junction vertices"});
     if (r.faces_against_field > 0) lines.push_back({"faces folded against u", std::to_string(r.faces_against_field)});
     if (r.field.at)
         lines.push_back({"Ambrosio–Tortorelli", std::to_string(r.field.at->total_rounds()) + " rounds, " +
@@ -59,6 +62,15 @@ ViewPage result_page(const PipelineResult& result, const PipelineOptions& option
     layer.name = "regularized surface";
     layer.mesh = result_mesh(result, false);
     layer.digital = result_mesh(result, false, true);
+    if (!result.label_meshes.empty()) {
+        // The region behind a face (it bounds) is its inner label, the one in front its outer label.
+        layer.face_labels.resize(result.surface.face_count(), 2);
+        for (std::int64_t f = 0; f < result.surface.face_count(); ++f) {
+            const FaceLabels& l = result.surface.face_labels[std::size_t(f)];
+            layer.face_labels(f, 0) = static_cast<std::int32_t>(result.surface.label_values[l.inner]);
+            layer.face_labels(f, 1) = static_cast<std::int32_t>(result.surface.label_values[l.outer]);
+        }
+    }
     page.layers.push_back(std::move(layer));
     return page;
 }

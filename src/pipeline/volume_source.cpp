@@ -21,13 +21,16 @@ constexpr double kBytesPerVoxel = 1.0;
 constexpr double kBytesPerSurfel = 3300.0;
 constexpr double kFactorBytesPerSurfelLog = 640.0;
 
-/// The voxel count that --max-memory leaves room for (the mask alone), or max_voxels.
+/// Bytes per voxel of the loaded volume: a mask, or label indices.
+int bytes_per_voxel(const VolumeSource& o) { return o.is_multi_label() ? 4 : int(kBytesPerVoxel); }
+
+/// The voxel count that --max-memory leaves room for (the mask or labels alone), or max_voxels.
 std::int64_t memory_voxel_cap(const VolumeSource& o) {
     if (o.max_memory.empty()) return o.max_voxels;
     const double bytes = static_cast<double>(parse_memory_size("--max-memory", o.max_memory));
     if (bytes <= kFixedBytes)
         throw Error("--max-memory " + o.max_memory + " is below the " + human_bytes(kFixedBytes) + " any run needs");
-    const double voxels = (bytes - kFixedBytes) / kBytesPerVoxel;
+    const double voxels = (bytes - kFixedBytes) / bytes_per_voxel(o);
     return voxels < double(o.max_voxels) ? static_cast<std::int64_t>(voxels) : o.max_voxels;
 }
 
@@ -55,24 +58,38 @@ std::uint64_t parse_memory_size(const std::string& option, const std::string& te
     return static_cast<std::uint64_t>(bytes);
 }
 
-std::int64_t count_surfels(const BinaryVolume& volume) {
-    const VoxelGrid& g = volume.grid;
+namespace {
+
+/// Faces between 6-neighbours of different labels (outside the grid is label 0), each once:
+/// towards +x, +y, +z, and across the grid's lower borders. One pass, no allocation.
+template <class LabelAt>
+std::int64_t count_faces(const VoxelGrid& g, LabelAt label) {
     const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
     std::int64_t count = 0;
 #pragma omp parallel for schedule(static) reduction(+ : count)
     for (std::int64_t k = 0; k < nz; ++k)
         for (std::int64_t j = 0; j < ny; ++j)
             for (std::int64_t i = 0; i < nx; ++i) {
-                if (!volume.inside(i, j, k)) continue;
-                count += !volume.inside(i - 1, j, k) + !volume.inside(i + 1, j, k) + !volume.inside(i, j - 1, k) +
-                         !volume.inside(i, j + 1, k) + !volume.inside(i, j, k - 1) + !volume.inside(i, j, k + 1);
+                const std::uint32_t l = label(i, j, k);
+                count += (l != label(i + 1, j, k)) + (l != label(i, j + 1, k)) + (l != label(i, j, k + 1));
+                count += (i == 0 && l != 0) + (j == 0 && l != 0) + (k == 0 && l != 0);
             }
     return count;
 }
 
-double estimate_run_memory(std::int64_t voxels, std::int64_t surfels, bool factorization) {
+}  // namespace
+
+std::int64_t count_surfels(const BinaryVolume& volume) {
+    return count_faces(volume.grid, [&](std::int64_t i, std::int64_t j, std::int64_t k) { return volume.inside(i, j, k) ? 1u : 0u; });
+}
+
+std::int64_t count_surfels(const LabelVolume& volume) {
+    return count_faces(volume.grid, [&](std::int64_t i, std::int64_t j, std::int64_t k) { return volume.label(i, j, k); });
+}
+
+double estimate_run_memory(std::int64_t voxels, std::int64_t surfels, bool factorization, int bytes_per_voxel) {
     const double m = static_cast<double>(surfels);
-    double bytes = kFixedBytes + kBytesPerVoxel * static_cast<double>(voxels) + kBytesPerSurfel * m;
+    double bytes = kFixedBytes + bytes_per_voxel * static_cast<double>(voxels) + kBytesPerSurfel * m;
     if (factorization && m > 1) bytes += kFactorBytesPerSurfelLog * m * std::log2(m);
     return bytes;
 }
@@ -80,12 +97,12 @@ double estimate_run_memory(std::int64_t voxels, std::int64_t surfels, bool facto
 void check_run_memory(const VolumeSource& o, std::int64_t voxels, std::int64_t surfels, bool factorization) {
     if (o.max_memory.empty()) return;
     const double limit = static_cast<double>(parse_memory_size("--max-memory", o.max_memory));
-    const double estimate = estimate_run_memory(voxels, surfels, factorization);
+    const double estimate = estimate_run_memory(voxels, surfels, factorization, bytes_per_voxel(o));
     if (estimate <= limit) return;
     std::string advice = "use a coarser --h";
     if (o.shape.empty()) advice = "crop or subsample the volume";
     if (factorization) advice += ", --solver cg or amg (no factorization: " +
-                                 human_bytes(estimate_run_memory(voxels, surfels, false)) + ")";
+                                 human_bytes(estimate_run_memory(voxels, surfels, false, bytes_per_voxel(o))) + ")";
     throw Error("estimated peak memory " + human_bytes(estimate) + " (" + std::to_string(voxels) + " voxels, " +
                 std::to_string(surfels) + " surfels" + (factorization ? ", sparse Cholesky factor" : "") +
                 ") exceeds --max-memory " + o.max_memory + " (" + human_bytes(limit) + "): " + advice +
@@ -263,11 +280,45 @@ std::string most_of_the_volume_warning(const VolumeSource& o, double fraction) {
            (modes.empty() ? "" : "; the values' main modes are " + modes) + " (choose the object with --label, --min, --max)";
 }
 
+/// --multi-label: the label map of the file (every distinct value a label), or the shape's
+/// digitization as the label map {0, 1}; --labels keeps some; --spacing applies.
+LoadedVolume load_label_map(const VolumeSource& o) {
+    if (o.array) throw Error("--multi-label reads label maps from files and shapes, not yet from arrays");
+    LoadedVolume loaded;
+    if (!o.shape.empty()) {
+        loaded = digitize_shape(o);
+        loaded.labels = label_volume_from_mask(loaded.volume);
+    } else {
+        loaded.labels = read_within_limits(o, [&](const VolumeLimits& limits) {
+            return read_label_volume(o.input_path, o.raw_layout ? &*o.raw_layout : nullptr, limits, &loaded.file);
+        });
+        loaded.description = o.input_path;
+        if (o.spacing) {
+            check_spacing(*o.spacing);
+            loaded.labels->grid.spacing = *o.spacing;
+        }
+        loaded.h = loaded.labels->grid.spacing.maxCoeff();
+    }
+    if (!o.labels.empty()) keep_labels(*loaded.labels, o.labels, "--labels");
+    loaded.volume = BinaryVolume{loaded.labels->grid, {}};  // the grid only: the labels are the data
+    const std::vector<std::int64_t> counts = loaded.labels->voxel_counts();
+    std::int64_t labelled = 0, present = 0;
+    for (std::size_t l = 1; l < counts.size(); ++l) labelled += counts[l], present += counts[l] > 0;
+    if (labelled == 0) {
+        const std::string values = o.shape.empty() ? input_value_range(o) : "";
+        throw Error((o.shape.empty() ? o.input_path : o.shape) + ": no voxel has a label (with --multi-label every non-zero value is one)" +
+                    (values.empty() ? "" : "; " + values));
+    }
+    loaded.description += " (" + std::to_string(present) + (present == 1 ? " label)" : " labels)");
+    return loaded;
+}
+
 }  // namespace
 
 LoadedVolume load_volume(const VolumeSource& o) {
     check_input_choice(o);
     if (o.max_voxels <= 0) throw Error("--max-voxels must be positive (got " + std::to_string(o.max_voxels) + ")");
+    if (o.is_multi_label()) return load_label_map(o);
     if (!o.shape.empty()) return digitize_shape(o);
     LoadedVolume loaded = o.array ? threshold_array(o) : read_file(o);
     const std::int64_t object = loaded.volume.object_voxel_count();

@@ -9,6 +9,7 @@
 
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
+#include "dsreg/label_surface.hpp"
 
 namespace dsreg {
 
@@ -64,7 +65,7 @@ ClampedRegularizationResult regularize_clamped(const DigitalSurface& surface, co
                                                const RegularizationWeights& weights, const ClampOptions& options) {
     ClampedRegularizationResult result;
     auto started = Clock::now();
-    const VertexLinks links = vertex_links(surface.quads, surface.vertex_count());
+    const VertexLinks links = fairness_links(surface);  // junction-aware on a label complex
     const RegularizationSystem system =
         assemble_regularization_system(surface.vertices, surface.quads, links, normals, weights);
     Eigen::VectorXd lower, upper;

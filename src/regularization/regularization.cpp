@@ -125,6 +125,13 @@ public:
         touch(std::int32_t(j));
         for (std::int64_t q = links_.offsets[std::size_t(j)]; q < links_.offsets[std::size_t(j + 1)]; ++q) touch(links_.neighbors[std::size_t(q)]);
         for (std::int64_t q = in_.offsets[std::size_t(j)]; q < in_.offsets[std::size_t(j + 1)]; ++q) touch(in_.neighbors[std::size_t(q)]);
+        // The face neighbours of j are in its links on a manifold, not always on a label complex
+        // (a junction vertex is linked along its junction curve only).
+        for (std::int64_t q = incidence_.start[std::size_t(j)]; q < incidence_.start[std::size_t(j + 1)]; ++q) {
+            const std::int64_t f = incidence_.face[std::size_t(q)] / k_, e = incidence_.face[std::size_t(q)] % k_;
+            touch(quads_(f, (e + 1) % k_));
+            touch(quads_(f, (e + k_ - 1) % k_));
+        }
         if (fairness_)
             for_each_fairness_row(j, [&](std::int64_t i, double) {
                 for (std::int64_t q = links_.offsets[std::size_t(i)]; q < links_.offsets[std::size_t(i + 1)]; ++q) touch(links_.neighbors[std::size_t(q)]);

@@ -2,6 +2,8 @@
 
 #include <chrono>
 
+#include "dsreg/label_surface.hpp"
+
 namespace dsreg {
 
 RegularizationResult regularize(const DigitalSurface& surface, const PointMatrix& normals,
@@ -10,7 +12,7 @@ RegularizationResult regularize(const DigitalSurface& surface, const PointMatrix
     const auto seconds_since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
     RegularizationResult result;
     auto started = Clock::now();
-    const VertexLinks links = vertex_links(surface.quads, surface.vertex_count());
+    const VertexLinks links = fairness_links(surface);  // junction-aware on a label complex
     const RegularizationSystem system =
         assemble_regularization_system(surface.vertices, surface.quads, links, normals, weights);
     result.assembly_seconds = seconds_since(started);

@@ -6,35 +6,11 @@
 #include <tuple>
 
 #include "dsreg/error.hpp"
+#include "surface_internal.hpp"
 
 namespace dsreg {
 
-namespace {
-
-using Pointel = std::array<std::int64_t, 3>;
-
-/// Disjoint sets with path halving and union by index (deterministic roots).
-class UnionFind {
-public:
-    explicit UnionFind(std::size_t size) : parent_(size) { std::iota(parent_.begin(), parent_.end(), 0u); }
-    std::uint32_t find(std::uint32_t x) {
-        while (parent_[x] != x) {
-            parent_[x] = parent_[parent_[x]];
-            x = parent_[x];
-        }
-        return x;
-    }
-    void unite(std::uint32_t a, std::uint32_t b) {
-        a = find(a);
-        b = find(b);
-        if (a == b) return;
-        if (a < b) std::swap(a, b);
-        parent_[a] = b;  // the smaller index stays root
-    }
-
-private:
-    std::vector<std::uint32_t> parent_;
-};
+namespace surface_detail {
 
 /// Corner offsets (along the two tangent axes b = axis+1, c = axis+2) listed counter-clockwise
 /// seen from outside: e_b × e_c = e_axis, so (0,0),(1,0),(1,1),(0,1) turns positively around
@@ -58,13 +34,77 @@ std::array<Pointel, 4> corner_pointels(const Surfel& s) {
     return corners;
 }
 
+int edge_between(const std::array<Pointel, 4>& corners, const Pointel& p, const Pointel& q, bool& same_direction) {
+    for (int m = 0; m < 4; ++m) {
+        const Pointel& a = corners[m];
+        const Pointel& b = corners[(m + 1) % 4];
+        if ((a == p && b == q) || (a == q && b == p)) {
+            same_direction = a == p;
+            return m;
+        }
+    }
+    return -1;
+}
+
+int label_sides(const DigitalSurface& surface) {
+    for (const FaceLabels& l : surface.face_labels)
+        if (l.outer != 0) return 2;
+    return 1;
+}
+
+void unite_label_corners(const DigitalSurface& surface, int sides, UnionFind& corners) {
+    const std::int64_t m = surface.face_count();
+    for (std::int64_t f = 0; f < m; ++f) {
+        const auto mine = corner_pointels(surface.surfels[std::size_t(f)]);
+        for (int side = 0; side < sides; ++side) {
+            const FaceMatrix& adjacent = side == 0 ? surface.adjacent_face : surface.adjacent_face_outer;
+            const FaceLabels& labels = surface.face_labels[std::size_t(f)];
+            const std::uint32_t label = side == 0 ? labels.inner : labels.outer;
+            for (int e = 0; e < 4; ++e) {
+                const std::int64_t g = adjacent(f, e);
+                if (g < 0) continue;
+                const int g_side = surface.face_labels[std::size_t(g)].inner == label ? 0 : 1;
+                bool same = false;
+                const int edge = edge_between(corner_pointels(surface.surfels[std::size_t(g)]), mine[e], mine[(e + 1) % 4], same);
+                const int at_first = same ? edge : (edge + 1) % 4;  // corner of g at pointel mine[e]
+                const int at_second = same ? (edge + 1) % 4 : edge;
+                corners.unite(label_corner(f, side, e, sides), label_corner(g, g_side, at_first, sides));
+                corners.unite(label_corner(f, side, (e + 1) % 4, sides), label_corner(g, g_side, at_second, sides));
+            }
+        }
+    }
+}
+
+}  // namespace surface_detail
+
+namespace {
+
+using surface_detail::corner_pointels;
+using surface_detail::label_corner;
+using surface_detail::Pointel;
+using surface_detail::UnionFind;
+
+/// The label of a voxel, 0 outside the grid, for the two kinds of volumes: the extraction is
+/// written once against these (a binary volume is the label map {0, 1}).
+struct MaskLabels {
+    const BinaryVolume& volume;
+    const VoxelGrid& grid() const { return volume.grid; }
+    std::uint32_t operator()(const std::int64_t v[3]) const { return volume.inside(v[0], v[1], v[2]) ? 1u : 0u; }
+};
+
+struct IndexLabels {
+    const LabelVolume& volume;
+    const VoxelGrid& grid() const { return volume.grid; }
+    std::uint32_t operator()(const std::int64_t v[3]) const { return volume.label(v[0], v[1], v[2]); }
+};
+
 /// The in-plane axis direction that crosses edge e (corner e → corner e+1) of surfel s,
 /// pointing away from the face: returns (axis, sign).
 std::pair<int, int> edge_crossing_direction(const Surfel& s, int e) {
     const int a = s.axis, b = (a + 1) % 3, c = (a + 2) % 3;
     const int side = s.sign > 0 ? 1 : 0;
-    const int* o0 = kCornerOffsets[side][e];
-    const int* o1 = kCornerOffsets[side][(e + 1) % 4];
+    const int* o0 = surface_detail::kCornerOffsets[side][e];
+    const int* o1 = surface_detail::kCornerOffsets[side][(e + 1) % 4];
     if (o0[0] == o1[0]) return {b, o0[0] == 1 ? 1 : -1};
     return {c, o0[1] == 1 ? 1 : -1};
 }
@@ -72,31 +112,40 @@ std::pair<int, int> edge_crossing_direction(const Surfel& s, int e) {
 int direction_code(int axis, int sign) { return 2 * axis + (sign > 0 ? 1 : 0); }
 
 /// Surfels sorted by key = 6·(voxel linear index) + direction code, with an index of the first
-/// surfel of every voxel row for fast look-up.
+/// surfel of every voxel row for fast look-up, and the labels of each.
 struct SurfelIndex {
     std::vector<Surfel> surfels;
+    std::vector<FaceLabels> labels;
     std::vector<std::int64_t> keys;
     std::vector<std::int64_t> row_first;  ///< size ny·nz + 1
 };
 
-SurfelIndex enumerate_surfels(const BinaryVolume& volume) {
-    const VoxelGrid& g = volume.grid;
+/// One pass over the voxels: every face between a voxel and a neighbour of a lower label (the
+/// background outside the grid) is a surfel of the voxel.
+template <class Labels>
+SurfelIndex enumerate_surfels(const Labels& label) {
+    const VoxelGrid& g = label.grid();
     const std::int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
     std::vector<std::vector<Surfel>> per_slice(static_cast<std::size_t>(nz));
+    std::vector<std::vector<FaceLabels>> per_slice_labels(static_cast<std::size_t>(nz));
 #pragma omp parallel for schedule(dynamic)
     for (std::int64_t k = 0; k < nz; ++k) {
         std::vector<Surfel>& out = per_slice[static_cast<std::size_t>(k)];
+        std::vector<FaceLabels>& out_labels = per_slice_labels[static_cast<std::size_t>(k)];
         for (std::int64_t j = 0; j < ny; ++j)
             for (std::int64_t i = 0; i < nx; ++i) {
-                if (!volume.inside(i, j, k)) continue;
                 const std::int64_t v[3] = {i, j, k};
+                const std::uint32_t inner = label(v);
+                if (inner == 0) continue;
                 for (int axis = 0; axis < 3; ++axis)
                     for (int sign : {-1, 1}) {
                         std::int64_t w[3] = {v[0], v[1], v[2]};
                         w[axis] += sign;
-                        if (volume.inside(w[0], w[1], w[2])) continue;
+                        const std::uint32_t outer = label(w);
+                        if (outer >= inner) continue;
                         out.push_back(Surfel{{std::int32_t(i), std::int32_t(j), std::int32_t(k)},
                                              std::int8_t(axis), std::int8_t(sign)});
+                        out_labels.push_back(FaceLabels{inner, outer});
                     }
             }
     }
@@ -104,9 +153,12 @@ SurfelIndex enumerate_surfels(const BinaryVolume& volume) {
     std::size_t total = 0;
     for (const auto& s : per_slice) total += s.size();
     index.surfels.reserve(total);
-    for (auto& s : per_slice) {
-        index.surfels.insert(index.surfels.end(), s.begin(), s.end());
-        std::vector<Surfel>().swap(s);
+    index.labels.reserve(total);
+    for (std::size_t k = 0; k < per_slice.size(); ++k) {
+        index.surfels.insert(index.surfels.end(), per_slice[k].begin(), per_slice[k].end());
+        index.labels.insert(index.labels.end(), per_slice_labels[k].begin(), per_slice_labels[k].end());
+        std::vector<Surfel>().swap(per_slice[k]);
+        std::vector<FaceLabels>().swap(per_slice_labels[k]);
     }
     index.keys.resize(total);
     index.row_first.assign(static_cast<std::size_t>(ny * nz + 1), 0);
@@ -129,85 +181,100 @@ std::int64_t find_surfel(const SurfelIndex& index, const VoxelGrid& g, const std
     return it - index.keys.begin();
 }
 
-/// The surfel across edge e of surfel s: with n the outward normal and t the crossing direction,
-/// the candidates are the concave turn (voxel v+t+n, normal −t), the flat continuation (voxel v+t,
-/// normal n) and the convex turn (voxel v, normal t). Where v and v+t+n touch only along this
-/// edge (v+t is background), 26-connectivity joins them (concave) and 6-connectivity keeps
-/// them apart (convex). Both rules are symmetric, so faces pair up consistently.
-/// `four_surfels` tells whether the linel has four surfels (v and v+t+n touch only along it).
-std::int64_t neighbor_across_edge(const BinaryVolume& volume, const SurfelIndex& index, const Surfel& s, int e,
+/// The face between voxel v and its neighbour along (axis, sign), two voxels of different
+/// labels: the surfel of the higher label.
+template <class Labels>
+std::int64_t find_face_between(const Labels& label, const SurfelIndex& index, const std::int64_t v[3], int axis, int sign) {
+    std::int64_t w[3] = {v[0], v[1], v[2]};
+    w[axis] += sign;
+    if (label(v) > label(w)) return find_surfel(index, label.grid(), v, axis, sign);
+    if (!label.grid().contains(w[0], w[1], w[2])) return -1;
+    return find_surfel(index, label.grid(), w, axis, -sign);
+}
+
+/// The face across edge e of surfel s in the surface of the label on `side` of it (0: inner,
+/// the voxel of s; 1: outer, the voxel across). With v that label's voxel, n its outward normal
+/// and t the crossing direction, the candidates are the concave turn (voxel v+t+n, normal −t),
+/// the flat continuation (voxel v+t, normal n) and the convex turn (voxel v, normal t). Where v
+/// and v+t+n touch only along this edge (v+t of another label), 26-connectivity joins them
+/// (concave) and 6-connectivity keeps them apart (convex). Both rules are symmetric, so faces
+/// pair up consistently within each label's surface. `four_surfels` tells whether the linel has
+/// four surfels of that label's surface (v and v+t+n touch only along it).
+template <class Labels>
+std::int64_t neighbor_across_edge(const Labels& label, const SurfelIndex& index, const Surfel& s, int side, int e,
                                   Connectivity connectivity, bool& four_surfels) {
     const auto [t_axis, t_sign] = edge_crossing_direction(s, e);
-    const std::int64_t v[3] = {s.voxel[0], s.voxel[1], s.voxel[2]};
+    std::int64_t v[3] = {s.voxel[0], s.voxel[1], s.voxel[2]};
+    int n_sign = s.sign;
+    if (side == 1) {
+        v[s.axis] += s.sign;
+        n_sign = -s.sign;
+    }
+    const std::uint32_t own = label(v);
     std::int64_t flat[3] = {v[0], v[1], v[2]};
     flat[t_axis] += t_sign;
     std::int64_t diagonal[3] = {flat[0], flat[1], flat[2]};
-    diagonal[s.axis] += s.sign;
-    const bool flat_inside = volume.inside(flat[0], flat[1], flat[2]);
-    const bool diagonal_inside = volume.inside(diagonal[0], diagonal[1], diagonal[2]);
+    diagonal[s.axis] += n_sign;
+    const bool flat_inside = label(flat) == own;
+    const bool diagonal_inside = label(diagonal) == own;
     four_surfels = diagonal_inside && !flat_inside;
     const bool concave = diagonal_inside && (flat_inside || connectivity == Connectivity::TwentySix);
-    if (concave) return find_surfel(index, volume.grid, diagonal, t_axis, -t_sign);
-    if (flat_inside) return find_surfel(index, volume.grid, flat, s.axis, s.sign);
-    return find_surfel(index, volume.grid, v, t_axis, t_sign);
+    if (concave) return find_face_between(label, index, diagonal, t_axis, -t_sign);
+    if (flat_inside) return find_face_between(label, index, flat, s.axis, n_sign);
+    return find_face_between(label, index, v, t_axis, t_sign);
 }
 
-/// Index of the edge of `corners` that runs from `from` to `to`, or −1.
-int edge_joining(const std::array<Pointel, 4>& corners, const Pointel& from, const Pointel& to) {
-    for (int m = 0; m < 4; ++m)
-        if (corners[m] == from && corners[(m + 1) % 4] == to) return m;
-    return -1;
-}
-
-/// Fills adjacent_face and returns, per face edge, the matching edge index in the adjacent face.
-/// `four_surfel_edges` gets, per face, bit e set when its edge e lies on a linel of four surfels.
-std::vector<std::int8_t> pair_face_edges(const BinaryVolume& volume, const SurfelIndex& index, Connectivity connectivity,
-                                         FaceMatrix& adjacent_face, std::vector<std::uint8_t>& four_surfel_edges) {
+/// Fills the adjacency of the surface of the label on `side` of every face (−1 for a
+/// background side). `four_surfel_edges` gets, per face, bit e set when its edge e lies on a
+/// linel of four surfels of that surface.
+template <class Labels>
+void pair_face_edges(const Labels& label, const SurfelIndex& index, Connectivity connectivity, int side,
+                     FaceMatrix& adjacent, std::vector<std::uint8_t>& four_surfel_edges) {
     const std::int64_t m = static_cast<std::int64_t>(index.surfels.size());
-    adjacent_face.resize(m, 4);
-    std::vector<std::int8_t> adjacent_edge(static_cast<std::size_t>(4 * m));
+    adjacent.resize(m, 4);
     four_surfel_edges.assign(static_cast<std::size_t>(m), 0);
     bool inconsistent = false;
 #pragma omp parallel for schedule(static)
     for (std::int64_t f = 0; f < m; ++f) {
         const Surfel& s = index.surfels[static_cast<std::size_t>(f)];
+        if (side == 1 && index.labels[std::size_t(f)].outer == 0) {
+            adjacent.row(f).setConstant(-1);
+            continue;
+        }
         const auto corners = corner_pointels(s);
         for (int e = 0; e < 4; ++e) {
             bool four_surfels = false;
-            const std::int64_t g = neighbor_across_edge(volume, index, s, e, connectivity, four_surfels);
-            const int edge = g < 0 ? -1 : edge_joining(corner_pointels(index.surfels[static_cast<std::size_t>(g)]),
-                                                       corners[(e + 1) % 4], corners[e]);
-            if (edge < 0) {
+            const std::int64_t g = neighbor_across_edge(label, index, s, side, e, connectivity, four_surfels);
+            bool same = false;
+            const int edge = g < 0 ? -1
+                                   : surface_detail::edge_between(corner_pointels(index.surfels[static_cast<std::size_t>(g)]),
+                                                                  corners[e], corners[(e + 1) % 4], same);
+            if (edge < 0 || g == f) {
                 inconsistent = true;  // benign race: only ever set to true
                 continue;
             }
-            adjacent_face(f, e) = static_cast<std::int32_t>(g);
-            adjacent_edge[static_cast<std::size_t>(4 * f + e)] = static_cast<std::int8_t>(edge);
+            adjacent(f, e) = static_cast<std::int32_t>(g);
             if (four_surfels) four_surfel_edges[static_cast<std::size_t>(f)] |= std::uint8_t(1u << e);
         }
     }
     if (inconsistent) throw Error("internal error: digital surface edge pairing is inconsistent");
-    return adjacent_edge;
 }
 
-/// Groups face corners into umbrellas (one vertex each): across every glued edge, the corners
-/// at the same pointel belong to the same umbrella.
-void build_vertices(DigitalSurface& surface, const std::vector<std::int8_t>& adjacent_edge) {
-    const std::int64_t m = static_cast<std::int64_t>(surface.surfels.size());
-    UnionFind corners(static_cast<std::size_t>(4 * m));
-    for (std::int64_t f = 0; f < m; ++f)
-        for (int e = 0; e < 4; ++e) {
-            const std::int64_t g = surface.adjacent_face(f, e);
-            if (g < f) continue;  // each edge once
-            const int edge = adjacent_edge[static_cast<std::size_t>(4 * f + e)];
-            corners.unite(std::uint32_t(4 * f + e), std::uint32_t(4 * g + (edge + 1) % 4));
-            corners.unite(std::uint32_t(4 * f + (e + 1) % 4), std::uint32_t(4 * g + edge));
-        }
-    std::vector<std::int32_t> vertex_of_root(static_cast<std::size_t>(4 * m), -1);
+/// Groups face corners into vertices: the corners that some label's umbrella joins (across
+/// every glued edge, the corners at the same pointel), and the two sides of each face corner.
+void build_vertices(DigitalSurface& surface) {
+    const std::int64_t m = surface.face_count();
+    const int sides = surface_detail::label_sides(surface);
+    UnionFind corners(static_cast<std::size_t>(4 * sides * m));
+    surface_detail::unite_label_corners(surface, sides, corners);
+    if (sides == 2)
+        for (std::int64_t f = 0; f < m; ++f)
+            if (surface.face_labels[std::size_t(f)].outer != 0)
+                for (int k = 0; k < 4; ++k) corners.unite(label_corner(f, 0, k, sides), label_corner(f, 1, k, sides));
+    std::vector<std::int32_t> vertex_of_root(corners.size(), -1);
     std::vector<std::int64_t> first_corner;
-    surface.quads.resize(m, 4);
     for (std::int64_t c = 0; c < 4 * m; ++c) {
-        const std::uint32_t root = corners.find(std::uint32_t(c));
+        const std::uint32_t root = corners.find(label_corner(c / 4, 0, int(c % 4), sides));
         std::int32_t& id = vertex_of_root[root];
         if (id < 0) {
             id = static_cast<std::int32_t>(first_corner.size());
@@ -227,37 +294,56 @@ void build_vertices(DigitalSurface& surface, const std::vector<std::int8_t>& adj
     }
 }
 
-/// Glues edge e of face f to edge h of face g (both ways).
-void glue(DigitalSurface& surface, std::vector<std::int8_t>& adjacent_edge, std::int32_t f, int e, std::int32_t g, int h) {
-    surface.adjacent_face(f, e) = g;
-    surface.adjacent_face(g, h) = f;
-    adjacent_edge[static_cast<std::size_t>(4 * f + e)] = static_cast<std::int8_t>(h);
-    adjacent_edge[static_cast<std::size_t>(4 * g + h)] = static_cast<std::int8_t>(e);
+/// Edge of face g glued to edge e of face f (the edge of g between the same two pointels).
+int matching_edge(const DigitalSurface& surface, std::int64_t f, int e, std::int64_t g) {
+    const auto corners = corner_pointels(surface.surfels[static_cast<std::size_t>(f)]);
+    bool same = false;
+    return surface_detail::edge_between(corner_pointels(surface.surfels[static_cast<std::size_t>(g)]), corners[e],
+                                        corners[(e + 1) % 4], same);
 }
 
-/// A linel of four surfels f1, f2, f3, f4 (f1 and f3 run along it in the same direction, f2 and
-/// f4 the other way) is glued f1–f2, f3–f4 or f1–f4, f3–f2. If both its end pointels come out
-/// with a single vertex, its two glued edges join the same two vertices: the surface is pinched
-/// along the linel, and no mesh with straight edges can separate the two sheets there (e.g. two
-/// voxels touching by one edge, joined by 26-connectivity). The other gluing splits both end
-/// vertices in two (around each end pointel the umbrella through the linel twice becomes two
-/// umbrellas), which the regularization can pull apart. Re-glues such linels, at most one per
-/// vertex per call (two re-gluings at one pointel could merge its umbrellas again); returns how
-/// many. The vertices must be rebuilt afterwards.
-std::int64_t reglue_pinched_linels(DigitalSurface& surface, std::vector<std::int8_t>& adjacent_edge,
-                                   const std::vector<std::uint8_t>& four_surfel_edges) {
+/// A linel of four surfels of one label's surface, f1, f2, f3, f4 (f1 and f3 run along it in
+/// the same direction, f2 and f4 the other way), is glued f1–f2, f3–f4 or f1–f4, f3–f2. If both
+/// its end pointels come out with a single vertex of that label's surface, its two glued edges
+/// join the same two vertices: the surface is pinched along the linel, and no mesh with straight
+/// edges can separate the two sheets there (e.g. two voxels touching by one edge, joined by
+/// 26-connectivity). The other gluing splits both end vertices in two (around each end pointel
+/// the umbrella through the linel twice becomes two umbrellas), which the regularization can
+/// pull apart. Re-glues such linels, at most one per vertex per call (two re-gluings at one
+/// pointel could merge its umbrellas again); returns how many. `four_surfel_edges[side]` marks
+/// the edges on linels of four surfels in the surface of the label on that side of each face.
+/// The vertices must be rebuilt afterwards.
+std::int64_t reglue_pinched_linels(DigitalSurface& surface, const std::vector<std::uint8_t> four_surfel_edges[2]) {
+    const std::int64_t m = surface.face_count();
+    const int sides = surface_detail::label_sides(surface);
+    UnionFind corners(static_cast<std::size_t>(4 * sides * m));
+    surface_detail::unite_label_corners(surface, sides, corners);  // classes: the labels' own vertices
     struct FaceEdge {
-        std::int32_t from, to, face;
-        int edge;
-        bool operator<(const FaceEdge& o) const { return std::tie(from, to, face) < std::tie(o.from, o.to, o.face); }
+        std::uint32_t from, to;  // the label's own vertices, in the label's orientation
+        std::int64_t face;
+        int side, edge;
+        bool operator<(const FaceEdge& o) const {
+            return std::tie(from, to, face, side) < std::tie(o.from, o.to, o.face, o.side);
+        }
     };
     std::vector<FaceEdge> edges;
-    for (std::int64_t f = 0; f < surface.face_count(); ++f)
-        for (int e = 0; e < 4; ++e)
-            if (four_surfel_edges[static_cast<std::size_t>(f)] & (1u << e))
-                edges.push_back({surface.quads(f, e), surface.quads(f, (e + 1) % 4), std::int32_t(f), e});
+    for (int side = 0; side < sides; ++side)
+        for (std::int64_t f = 0; f < m; ++f)
+            for (int e = 0; e < 4; ++e)
+                if (four_surfel_edges[side][static_cast<std::size_t>(f)] & (1u << e)) {
+                    const std::uint32_t first = corners.find(label_corner(f, side, e, sides));
+                    const std::uint32_t second = corners.find(label_corner(f, side, (e + 1) % 4, sides));
+                    // the outer side sees the face from behind: its edges run the other way
+                    edges.push_back(side == 0 ? FaceEdge{first, second, f, side, e} : FaceEdge{second, first, f, side, e});
+                }
     std::sort(edges.begin(), edges.end());
-    std::vector<std::int32_t> touched;
+    const auto adjacency = [&](int side) -> FaceMatrix& {
+        return side == 0 ? surface.adjacent_face : surface.adjacent_face_outer;
+    };
+    const auto side_of = [&](std::int64_t face, std::uint32_t label) {
+        return surface.face_labels[static_cast<std::size_t>(face)].inner == label ? 0 : 1;
+    };
+    std::vector<std::uint32_t> touched;
     std::int64_t reglued = 0;
     for (std::size_t i = 0; i + 1 < edges.size(); ++i) {
         const FaceEdge &one = edges[i], &three = edges[i + 1];
@@ -267,22 +353,32 @@ std::int64_t reglue_pinched_linels(DigitalSurface& surface, std::vector<std::int
             continue;
         touched.push_back(one.from);
         touched.push_back(one.to);
-        const std::int32_t two = surface.adjacent_face(one.face, one.edge), four = surface.adjacent_face(three.face, three.edge);
-        const int two_edge = adjacent_edge[static_cast<std::size_t>(4 * one.face + one.edge)];
-        const int four_edge = adjacent_edge[static_cast<std::size_t>(4 * three.face + three.edge)];
-        glue(surface, adjacent_edge, one.face, one.edge, four, four_edge);
-        glue(surface, adjacent_edge, three.face, three.edge, two, two_edge);
+        const FaceLabels& labels = surface.face_labels[static_cast<std::size_t>(one.face)];
+        const std::uint32_t label = one.side == 0 ? labels.inner : labels.outer;
+        const std::int64_t two = adjacency(one.side)(one.face, one.edge);
+        const std::int64_t four = adjacency(three.side)(three.face, three.edge);
+        const int two_edge = matching_edge(surface, one.face, one.edge, two);
+        const int four_edge = matching_edge(surface, three.face, three.edge, four);
+        adjacency(one.side)(one.face, one.edge) = static_cast<std::int32_t>(four);
+        adjacency(side_of(four, label))(four, four_edge) = static_cast<std::int32_t>(one.face);
+        adjacency(three.side)(three.face, three.edge) = static_cast<std::int32_t>(two);
+        adjacency(side_of(two, label))(two, two_edge) = static_cast<std::int32_t>(three.face);
         ++reglued;
         ++i;
     }
     return reglued;
 }
 
+/// Connected components of the complex: faces glued in any label's surface.
 void label_components(DigitalSurface& surface) {
     const std::int64_t m = surface.face_count();
     UnionFind faces(static_cast<std::size_t>(m));
     for (std::int64_t f = 0; f < m; ++f)
-        for (int e = 0; e < 4; ++e) faces.unite(std::uint32_t(f), std::uint32_t(surface.adjacent_face(f, e)));
+        for (int e = 0; e < 4; ++e) {
+            faces.unite(std::uint32_t(f), std::uint32_t(surface.adjacent_face(f, e)));
+            if (surface.adjacent_face_outer(f, e) >= 0)
+                faces.unite(std::uint32_t(f), std::uint32_t(surface.adjacent_face_outer(f, e)));
+        }
     surface.face_component.assign(static_cast<std::size_t>(m), -1);
     std::vector<std::int32_t> label_of_root(static_cast<std::size_t>(m), -1);
     std::int32_t count = 0;
@@ -308,37 +404,59 @@ std::int64_t count_split_pointels(const DigitalSurface& surface) {
     return split;
 }
 
-}  // namespace
-
-DigitalSurface extract_digital_surface(const BinaryVolume& volume, Connectivity connectivity) {
-    const VoxelGrid& g = volume.grid;
-    if (g.dims[0] <= 0 || g.dims[1] <= 0 || g.dims[2] <= 0 ||
-        static_cast<std::int64_t>(volume.mask.size()) != g.voxel_count())
+void check_grid(const VoxelGrid& g, std::size_t voxel_values) {
+    if (g.dims[0] <= 0 || g.dims[1] <= 0 || g.dims[2] <= 0 || static_cast<std::int64_t>(voxel_values) != g.voxel_count())
         throw Error("invalid volume: dimensions do not match the voxel data");
     if (g.dims[0] >= INT32_MAX || g.dims[1] >= INT32_MAX || g.dims[2] >= INT32_MAX)
         throw Error("invalid volume: a dimension exceeds 2^31 - 2 voxels");
+}
 
-    SurfelIndex index = enumerate_surfels(volume);
+template <class Labels>
+DigitalSurface extract(const Labels& label, Connectivity connectivity, std::vector<std::int64_t> label_values) {
+    SurfelIndex index = enumerate_surfels(label);
     if (index.surfels.empty()) throw Error("the object is empty: no voxel has a value in the selected range");
-    if (index.surfels.size() >= (std::size_t(1) << 30))
-        throw Error("the surface has " + std::to_string(index.surfels.size()) + " surfels; at most 2^30 are supported");
+    bool two_sided = false;
+    for (const FaceLabels& l : index.labels) two_sided = two_sided || l.outer != 0;
+    const std::size_t limit = std::size_t(1) << (two_sided ? 29 : 30);  // 4 (8) corner ids per face in 32 bits
+    if (index.surfels.size() >= limit)
+        throw Error("the surface has " + std::to_string(index.surfels.size()) + " surfels; at most 2^" +
+                    (two_sided ? "29 are supported between labels" : "30 are supported"));
 
     DigitalSurface surface;
-    surface.grid = g;
-    std::vector<std::uint8_t> four_surfel_edges;
-    std::vector<std::int8_t> adjacent_edge =
-        pair_face_edges(volume, index, connectivity, surface.adjacent_face, four_surfel_edges);
+    surface.grid = label.grid();
+    surface.label_values = std::move(label_values);
+    std::vector<std::uint8_t> four_surfel_edges[2];
+    pair_face_edges(label, index, connectivity, 0, surface.adjacent_face, four_surfel_edges[0]);
+    pair_face_edges(label, index, connectivity, 1, surface.adjacent_face_outer, four_surfel_edges[1]);
     surface.surfels = std::move(index.surfels);
+    surface.face_labels = std::move(index.labels);
     index = SurfelIndex();
-    build_vertices(surface, adjacent_edge);
-    while (reglue_pinched_linels(surface, adjacent_edge, four_surfel_edges) > 0) {
-        const std::int64_t before = surface.vertex_count();
-        build_vertices(surface, adjacent_edge);
-        if (surface.vertex_count() <= before) throw Error("internal error: re-gluing a pinched linel split no vertex");
+    surface.quads.resize(std::int64_t(surface.surfels.size()), 4);
+    build_vertices(surface);
+    // Each re-gluing splits two vertices of a label's own surface, so the rounds are few (one
+    // per pinched linel sharing a vertex with another); the bound only guards against a bug.
+    for (int round = 0; reglue_pinched_linels(surface, four_surfel_edges) > 0; ++round) {
+        if (round == 1000) throw Error("internal error: pinched linels keep coming back");
+        build_vertices(surface);
     }
     label_components(surface);
     surface.split_pointel_count = count_split_pointels(surface);
     return surface;
+}
+
+}  // namespace
+
+DigitalSurface extract_digital_surface(const BinaryVolume& volume, Connectivity connectivity) {
+    check_grid(volume.grid, volume.mask.size());
+    return extract(MaskLabels{volume}, connectivity, {0, 1});
+}
+
+DigitalSurface extract_digital_surface(const LabelVolume& volume, Connectivity connectivity) {
+    check_grid(volume.grid, volume.labels.size());
+    if (volume.values.empty()) throw Error("invalid label map: no label table");
+    for (const std::uint32_t l : volume.labels)
+        if (l >= volume.values.size()) throw Error("invalid label map: a voxel has a label index beyond the label table");
+    return extract(IndexLabels{volume}, connectivity, volume.values);
 }
 
 PointMatrix surfel_centers(const DigitalSurface& surface) {

@@ -5,10 +5,12 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <limits>
 #include <new>
+#include <numeric>
 #include <sstream>
 #include <type_traits>
 #include <utility>
@@ -26,7 +28,7 @@ namespace {
 
 /// Integers print exactly, other values with enough digits to be recognised.
 std::string format_value(double value) {
-    if (value == static_cast<double>(static_cast<std::int64_t>(value)) && value > -9e18 && value < 9e18)
+    if (value > -9e18 && value < 9e18 && value == std::trunc(value))  // the range first: the cast of NaN or 1e19 is undefined
         return std::to_string(static_cast<std::int64_t>(value));
     std::ostringstream text;
     text.precision(17);
@@ -121,6 +123,10 @@ VoxelDestination VoxelDestination::mask(const ValueRange& range) { return VoxelD
 
 VoxelDestination VoxelDestination::values() { return VoxelDestination(Kind::Values, ValueRange{}); }
 
+VoxelDestination VoxelDestination::labels(std::int64_t max_labels) {
+    return VoxelDestination(Kind::Labels, ValueRange{}, nullptr, max_labels);
+}
+
 VoxelDestination VoxelDestination::statistics(ValueHistogram& histogram) {
     return VoxelDestination(Kind::Statistics, ValueRange{}, &histogram);
 }
@@ -135,16 +141,20 @@ void VoxelDestination::allocate(const std::string& path, const Index3& dims) {
     grid_ = VoxelGrid{};
     grid_.dims = dims;
     const auto count = static_cast<std::size_t>(grid_.voxel_count());
-    const bool values = kind_ == Kind::Values;
+    const int bytes_per_voxel = kind_ == Kind::Mask ? 1 : 4;
     try {
         if (kind_ == Kind::Values)
             values_.assign(count, 0.0f);
+        else if (kind_ == Kind::Labels)
+            labels_.assign(count, 0u);
         else if (kind_ == Kind::Mask)
             mask_.assign(count, 0);
     } catch (const std::bad_alloc&) {
-        const std::string bytes = std::to_string(grid_.voxel_count() * (values ? 4 : 1));
-        fail(path, "not enough memory for a " + format_dims(dims) + (values ? " volume of values (" : " mask (") + bytes + " bytes)");
+        const char* what = kind_ == Kind::Values ? " volume of values (" : kind_ == Kind::Labels ? " label map (" : " mask (";
+        fail(path, "not enough memory for a " + format_dims(dims) + what +
+                       std::to_string(grid_.voxel_count() * bytes_per_voxel) + " bytes)");
     }
+    if (kind_ == Kind::Labels && label_table_ == nullptr) label_table_ = std::make_shared<LabelTable>(path, max_labels_);
 }
 
 void VoxelDestination::store_x_plane(std::int64_t i, const VoxelDestination& plane) {
@@ -157,6 +167,8 @@ void VoxelDestination::store_x_plane(std::int64_t i, const VoxelDestination& pla
                 values_[target] = plane.values_[source];
             else if (kind_ == Kind::Mask)
                 mask_[target] = plane.mask_[source];
+            else if (kind_ == Kind::Labels)
+                labels_[target] = plane.labels_[source];
         }
 }
 
@@ -164,6 +176,7 @@ SampleWriter VoxelDestination::writer(const std::string& path, SampleFormat form
     switch (kind_) {
     case Kind::Values: return SampleWriter(path, format, values_);
     case Kind::Mask: return SampleWriter(path, format, range_, mask_);
+    case Kind::Labels: return SampleWriter(path, format, labels_, *label_table_);
     case Kind::Statistics: break;
     }
     return SampleWriter(path, format, *histogram_, size());
@@ -181,6 +194,58 @@ ScalarVolume VoxelDestination::take_values() {
     volume.grid = grid_;
     volume.values = std::move(values_);
     return volume;
+}
+
+LabelVolume VoxelDestination::take_labels() {
+    LabelVolume volume;
+    volume.grid = grid_;
+    volume.values = label_table_->finish(labels_);
+    volume.labels = std::move(labels_);
+    return volume;
+}
+
+// ----------------------------------------------------------------------------------------------
+// LabelTable
+
+LabelTable::LabelTable(const std::string& path, std::int64_t max_labels) : path_(path), max_labels_(max_labels) {
+    values_.push_back(0);
+    index_.emplace(0, 0u);
+}
+
+std::uint32_t LabelTable::look_up(double value, std::uint64_t voxel) {
+    // Integers of magnitude below 2^53 are exact in a double; anything else is not a label.
+    if (!(std::abs(value) < 9007199254740992.0) || value != std::floor(value))
+        fail(path_, "value " + format_value(value) + " of voxel #" + std::to_string(voxel) +
+                        " is not an integer: a label map holds integer labels");
+    const auto key = static_cast<std::int64_t>(value);
+    auto it = index_.find(key);
+    if (it == index_.end()) {
+        if (static_cast<std::int64_t>(values_.size()) > max_labels_)
+            fail(path_, "more than " + std::to_string(max_labels_) + " distinct labels (voxel #" + std::to_string(voxel) +
+                            " has one more): not a label map?");
+        it = index_.emplace(key, static_cast<std::uint32_t>(values_.size())).first;
+        values_.push_back(key);
+    }
+    last_value_ = value;
+    last_index_ = it->second;
+    return last_index_;
+}
+
+std::vector<std::int64_t> LabelTable::finish(std::vector<std::uint32_t>& labels) const {
+    // Index order: the background, then the other values increasing.
+    std::vector<std::uint32_t> order(values_.size());
+    std::iota(order.begin(), order.end(), 0u);
+    std::sort(order.begin() + 1, order.end(), [&](std::uint32_t a, std::uint32_t b) { return values_[a] < values_[b]; });
+    std::vector<std::uint32_t> renumbered(values_.size());
+    std::vector<std::int64_t> sorted(values_.size());
+    for (std::size_t rank = 0; rank < order.size(); ++rank) {
+        renumbered[order[rank]] = static_cast<std::uint32_t>(rank);
+        sorted[rank] = values_[order[rank]];
+    }
+#pragma omp parallel for schedule(static)
+    for (std::int64_t v = 0; v < static_cast<std::int64_t>(labels.size()); ++v)
+        labels[std::size_t(v)] = renumbered[labels[std::size_t(v)]];
+    return sorted;
 }
 
 // ----------------------------------------------------------------------------------------------
@@ -284,6 +349,14 @@ void SampleWriter::rescale(double slope, double intercept) {
     build_byte_tables();
 }
 
+SampleWriter::SampleWriter(const std::string& path, SampleFormat format, std::vector<std::uint32_t>& labels,
+                           LabelTable& table)
+    : SampleWriter(path, format, labels.size()) {
+    labels_ = labels.data();
+    label_table_ = &table;
+    build_byte_tables();
+}
+
 void SampleWriter::reject_values_above(double max_value, const std::string& limit_name) {
     has_max_ = true;
     max_value_ = max_value;
@@ -301,12 +374,16 @@ void SampleWriter::emit(const std::uint8_t* sample) {
     if (has_max_ && value > max_value_)
         fail(path_, "value " + format_value(value) + " of voxel #" + std::to_string(written_) + " exceeds " + max_name_ + " " +
                         format_value(max_value_));
-    if (mask_ != nullptr)
+    if (mask_ != nullptr) {
         mask_[written_++] = range_.contains(value) ? 1 : 0;
-    else if (values_ != nullptr)
+    } else if (labels_ != nullptr) {
+        labels_[written_] = label_table_->index_of(value, written_);
+        ++written_;
+    } else if (values_ != nullptr) {
         values_[written_++] = static_cast<float>(value);
-    else
+    } else {
         histogram_->add(value), ++written_;
+    }
 }
 
 void SampleWriter::consume(const std::uint8_t* data, std::size_t count) {
@@ -387,6 +464,11 @@ void SampleWriter::decode_typed(const std::uint8_t* data, std::size_t count) {
         float* out = values_ + written_;
         decode_values<T>(data, count, swap, slope_, intercept_, rescaled_,
                          [&](std::size_t i, double v) { out[i] = static_cast<float>(v); });
+    } else if (labels_ != nullptr) {
+        std::uint32_t* out = labels_ + written_;
+        const std::uint64_t first = written_;
+        decode_values<T>(data, count, swap, slope_, intercept_, rescaled_,
+                         [&](std::size_t i, double v) { out[i] = label_table_->index_of(v, first + i); });
     } else {
         decode_values<T>(data, count, swap, slope_, intercept_, rescaled_, [&](std::size_t, double v) { histogram_->add(v); });
     }
@@ -398,6 +480,8 @@ void SampleWriter::decode_run(const std::uint8_t* data, std::size_t count) {
             for (std::size_t i = 0; i < count; ++i) mask_[written_ + i] = mask_table_[data[i]];
         else if (values_ != nullptr)
             for (std::size_t i = 0; i < count; ++i) values_[written_ + i] = static_cast<float>(byte_table_[data[i]]);
+        else if (labels_ != nullptr)
+            for (std::size_t i = 0; i < count; ++i) labels_[written_ + i] = label_table_->index_of(byte_table_[data[i]], written_ + i);
         else
             for (std::size_t i = 0; i < count; ++i) histogram_->add(byte_table_[data[i]]);
     } else {
@@ -553,6 +637,14 @@ ScalarVolume read_volume_values(const std::string& path, const RawVolumeLayout* 
     volume_io_detail::read_volume_voxels(path, raw_layout, limits, destination);
     if (info != nullptr) *info = destination.info();
     return destination.take_values();
+}
+
+LabelVolume read_label_volume(const std::string& path, const RawVolumeLayout* raw_layout, const VolumeLimits& limits,
+                              VolumeFileInfo* info) {
+    auto destination = volume_io_detail::VoxelDestination::labels(limits.max_labels);
+    volume_io_detail::read_volume_voxels(path, raw_layout, limits, destination);
+    if (info != nullptr) *info = destination.info();
+    return destination.take_labels();
 }
 
 }  // namespace dsreg

@@ -16,7 +16,9 @@
 #include <cstdint>
 #include <fstream>
 #include <ostream>
+#include <memory>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <zlib.h>
@@ -74,8 +76,36 @@ private:
 };
 
 
+/// Label indices of the integer values of a label map, assigned as the values are decoded
+/// (index 0 is the value 0, the background), then renumbered in increasing order of value.
+/// The number of distinct labels is capped (VolumeLimits::max_labels) so that a hostile file of
+/// distinct values cannot make the table grow without bound.
+class LabelTable {
+public:
+    LabelTable(const std::string& path, std::int64_t max_labels);
+    /// The index of `value` (the value of voxel #voxel). Throws, naming the file and the voxel,
+    /// for a value that is not an integer of magnitude below 2^53, or one label too many.
+    std::uint32_t index_of(double value, std::uint64_t voxel) {
+        if (value == last_value_) return last_index_;
+        return look_up(value, voxel);
+    }
+    /// Renumbers `labels` so that indices increase with the value (background first) and
+    /// returns the value of each index.
+    std::vector<std::int64_t> finish(std::vector<std::uint32_t>& labels) const;
+
+private:
+    std::uint32_t look_up(double value, std::uint64_t voxel);
+
+    std::string path_;
+    std::int64_t max_labels_;
+    std::unordered_map<std::int64_t, std::uint32_t> index_;
+    std::vector<std::int64_t> values_;  ///< by index of first appearance
+    double last_value_ = 0;
+    std::uint32_t last_index_ = 0;
+};
+
 /// Decodes a stream of encoded samples, in voxel order, into either mask bytes (1 = value in
-/// `range`) or float values. Bytes may arrive in chunks of any size: a sample split between
+/// `range`), float values, or label indices. Bytes may arrive in chunks of any size: a sample split between
 /// chunks is completed by the next call. Optionally rejects values above a maximum (PGM's
 /// maxval). The destination vector must already have one element per voxel.
 class SampleWriter {
@@ -84,6 +114,8 @@ public:
     SampleWriter(const std::string& path, SampleFormat format, const ValueRange& range, std::vector<std::uint8_t>& mask);
     /// Values: values[i] = value of voxel i, rounded to float.
     SampleWriter(const std::string& path, SampleFormat format, std::vector<float>& values);
+    /// Labels: labels[i] = table.index_of(value of voxel i).
+    SampleWriter(const std::string& path, SampleFormat format, std::vector<std::uint32_t>& labels, LabelTable& table);
     /// Statistics: each of the `size` values is added to `histogram`, nothing is stored.
     SampleWriter(const std::string& path, SampleFormat format, ValueHistogram& histogram, std::uint64_t size);
 
@@ -114,8 +146,10 @@ private:
     std::string path_;
     SampleFormat format_;
     ValueRange range_;
-    std::uint8_t* mask_ = nullptr;  ///< exactly one of mask_ / values_ / histogram_ is set
+    std::uint8_t* mask_ = nullptr;  ///< exactly one of mask_ / values_ / labels_ / histogram_ is set
     float* values_ = nullptr;
+    std::uint32_t* labels_ = nullptr;
+    LabelTable* label_table_ = nullptr;
     ValueHistogram* histogram_ = nullptr;
     std::uint64_t size_ = 0;
     bool use_byte_table_ = false;
@@ -134,13 +168,15 @@ private:
 /// The name the thresholding decoder had before it could also keep values.
 using MaskWriter = SampleWriter;
 
-/// What a reader produces: a mask thresholded by a ValueRange (read_volume) or the values
-/// themselves as floats (read_volume_values). Readers call allocate() once the header is
-/// checked, then feed it through writer() (binary payloads) or set() (ASCII payloads).
+/// What a reader produces: a mask thresholded by a ValueRange (read_volume), the values
+/// themselves as floats (read_volume_values) or label indices (read_label_volume). Readers call
+/// allocate() once the header is checked, then feed it through writer() (binary payloads) or
+/// set() (ASCII payloads).
 class VoxelDestination {
 public:
     static VoxelDestination mask(const ValueRange& range);
     static VoxelDestination values();
+    static VoxelDestination labels(std::int64_t max_labels);
     /// Nothing stored per voxel: every value goes to `histogram` (read_value_histogram).
     static VoxelDestination statistics(ValueHistogram& histogram);
 
@@ -157,14 +193,20 @@ public:
         switch (kind_) {
         case Kind::Values: values_[index] = static_cast<float>(value); break;
         case Kind::Mask: mask_[index] = range_.contains(value) ? 1 : 0; break;
+        case Kind::Labels: labels_[index] = label_table_->index_of(value, index); break;
         case Kind::Statistics: histogram_->add(value); break;
         }
     }
     /// A decoder of encoded samples into this destination.
     SampleWriter writer(const std::string& path, SampleFormat format);
 
-    /// An empty destination of the same kind (mask with the same range, values, statistics).
-    VoxelDestination like() const { return VoxelDestination(kind_, range_, histogram_); }
+    /// An empty destination of the same kind (mask with the same range, values, labels, statistics).
+    /// A label map's plane shares this destination's label table, so that its indices are this one's.
+    VoxelDestination like() const {
+        VoxelDestination plane(kind_, range_, histogram_, max_labels_);
+        plane.label_table_ = label_table_;
+        return plane;
+    }
     /// False for statistics, which do not depend on the order of the voxels.
     bool keeps_voxel_order() const { return kind_ != Kind::Statistics; }
     /// Copies `plane` (allocated with dims (nz, ny, 1): k fastest, then j) into the voxels
@@ -173,19 +215,23 @@ public:
 
     BinaryVolume take_mask();
     ScalarVolume take_values();
+    LabelVolume take_labels();
 
 private:
-    enum class Kind { Mask, Values, Statistics };
-    VoxelDestination(Kind kind, const ValueRange& range, ValueHistogram* histogram = nullptr)
-        : kind_(kind), range_(range), histogram_(histogram) {}
+    enum class Kind { Mask, Values, Labels, Statistics };
+    VoxelDestination(Kind kind, const ValueRange& range, ValueHistogram* histogram = nullptr, std::int64_t max_labels = 0)
+        : kind_(kind), range_(range), histogram_(histogram), max_labels_(max_labels) {}
 
     Kind kind_;
     ValueRange range_;
     ValueHistogram* histogram_;
+    std::int64_t max_labels_;
     VoxelGrid grid_;
     VolumeFileInfo info_;
     std::vector<std::uint8_t> mask_;
     std::vector<float> values_;
+    std::vector<std::uint32_t> labels_;
+    std::shared_ptr<LabelTable> label_table_;  ///< created by allocate() (it names the file), shared by like()
 };
 
 // The format readers, each decoding one file into a destination (vol_format.cpp,

@@ -1,0 +1,83 @@
+// dsreg — the complex of a label map's interfaces (extract_digital_surface of a LabelVolume):
+// its edges and junctions, the links of the fairness term of the joint regularization, and the
+// closed surface of each label (docs/multi-label.md).
+//
+// Vocabulary. An *edge* of the complex is a class of face edges glued by some label's surface
+// (at a linel, the pairing of every label whose faces meet there): a manifold edge has two
+// faces, a *junction edge* has faces that separate three or more labels (three faces around a
+// linel with three labels, or four). A *junction vertex* is an end point of a junction edge:
+// where three or more regions meet, along a junction curve (two junction edges) or at a
+// junction point (one, or three and more). Every other vertex lies inside one interface.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "dsreg/digital_surface.hpp"
+#include "dsreg/mesh.hpp"
+
+namespace dsreg {
+
+struct ComplexEdges {
+    std::vector<std::int32_t> of_face_edge;         ///< edge of face edge (f, e), at index 4f + e
+    std::vector<std::array<std::int32_t, 2>> ends;  ///< the two vertices of each edge
+    std::vector<std::uint8_t> face_count;           ///< face edges glued into it (2, 3 or 4)
+    std::vector<char> junction;                     ///< its faces separate three or more labels
+
+    std::int64_t count() const { return static_cast<std::int64_t>(ends.size()); }
+};
+
+ComplexEdges complex_edges(const DigitalSurface& surface);
+
+/// 1 for the end points of junction edges; the number of junction edges of each vertex.
+struct Junctions {
+    std::vector<char> vertex;
+    std::vector<std::int32_t> edges_at_vertex;
+    std::int64_t vertex_count = 0;  ///< junction vertices
+    std::int64_t point_count = 0;   ///< junction vertices with other than two junction edges
+    std::int64_t edge_count = 0;    ///< junction edges
+};
+
+Junctions find_junctions(const DigitalSurface& surface, const ComplexEdges& edges);
+
+/// Links of the fairness term (eq. 11–14) on the complex, one neighbour per edge:
+///  * a vertex inside one interface: every edge (for a manifold complex, e.g. any binary
+///    volume, exactly vertex_links(quads), in the same order);
+///  * a junction vertex with two junction edges: only those two, so that the junction curve is
+///    smoothed along its length and not rounded across (its neighbours in the sheets are not
+///    averaged in);
+///  * a junction point (one, or three or more junction edges): none, no fairness; alignment and
+///    data place it.
+VertexLinks fairness_links(const DigitalSurface& surface);
+
+/// The closed surface of one label, made of faces and vertices of the complex, oriented outward
+/// of the label. It is the label's own digital surface: its faces are those of the label's
+/// indicator, paired the same way, and it has one vertex per umbrella. Where the label's surface
+/// has several umbrellas at one vertex of the complex (a *pinch*: e.g. two voxels of the label
+/// touching at a corner through which an interface of two other labels passes) its own vertices
+/// share that vertex's position.
+struct LabelMesh {
+    std::uint32_t label = 0;              ///< label index (surface.label_values[label] is its value)
+    std::vector<std::int64_t> faces;      ///< face of the complex of each face, increasing
+    std::vector<std::uint8_t> reversed;   ///< 1 where the label is the outer label of the face
+    FaceMatrix quads;                     ///< over the mesh's own vertices, counter-clockwise seen from outside
+    std::vector<std::int32_t> vertices;   ///< vertex of the complex of each own vertex
+    std::vector<std::int32_t> face_component;
+    std::int32_t component_count = 0;
+    std::int64_t pinch_vertices = 0;      ///< vertices of the complex carrying several own vertices
+
+    std::int64_t face_count() const { return quads.rows(); }
+    std::int64_t vertex_count() const { return static_cast<std::int64_t>(vertices.size()); }
+    /// V − E + F of each component (E = 2F: the surface is closed).
+    std::vector<std::int64_t> euler_characteristics() const;
+};
+
+/// The surface of every label with at least one face, in increasing label index.
+std::vector<LabelMesh> label_meshes(const DigitalSurface& surface);
+
+/// The mesh of a label over `positions` (one row per vertex of the complex), with the complex's
+/// face normals `normals` (flipped where the label is the outer one) if given.
+PolygonMesh label_polygon_mesh(const LabelMesh& mesh, const PointMatrix& positions, const PointMatrix& normals);
+
+}  // namespace dsreg
