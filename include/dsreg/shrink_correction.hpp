@@ -5,10 +5,12 @@
 // amount that the data term α alone holds back (on goursat at h = 0.25 the mesh is 0.05 h inside,
 // on a leopold arm 0.2 h). A Gauss digitization is not biased that way: the surfel centres lie,
 // on average over a few voxels, on the true surface. So the correction measures, per face, how far
-// the regularized surface moved along u from the surfel centre (at the smooth surface through the
-// quad's corners: its centroid plus the sagitta that the curvature between the neighbouring faces
-// gives; the centroid alone lies inside a convex surface, by 0.08 voxel on a tube 1.5 voxels in
-// radius), averages that offset over the surface (a low-pass filter: repeated averaging with the
+// the regularized surface moved along u from the surfel centre (the surfel's mean point), against
+// the mean over the quad of the smooth surface through its corners: its centroid plus two thirds
+// of the sagitta that the curvature between the neighbouring faces gives (the centroid lies
+// inside a convex surface by the sagitta, 0.08 voxel on a tube 1.5 voxels in radius; the apex of
+// the patch, the full sagitta, lies beyond its mean and made small round objects shrink),
+// averages that offset over the surface (a low-pass filter: repeated averaging with the
 // four edge-adjacent faces, which keeps the removal of the staircase, a pattern of one or two
 // voxels, and takes only the drift), and moves every vertex back along its normal by the mean of
 // its faces' averaged offsets.

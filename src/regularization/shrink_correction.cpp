@@ -19,14 +19,16 @@ PointMatrix quad_centroids(const DigitalSurface& surface, const PointMatrix& pos
     return centroid;
 }
 
-/// How far the smooth surface through a quad's corners lies beyond its centroid along u_f: a
-/// surface with normal curvatures κ_a, κ_b along the quad's sides (lengths a, b) passes through
-/// the corners (±a/2, ±b/2) at height −(κ_a a² + κ_b b²)/8 below its tangent plane, where the
-/// centroid is. The normal curvature across edge e is taken from the faces g, g' across the two
-/// sides parallel to it: (u_g − u_g')·(c_g − c_g') / |c_g − c_g'|² (c: centroids; 1/R on a sphere
-/// of radius R).
-double sagitta(const DigitalSurface& surface, const PointMatrix& positions, const PointMatrix& normals,
-               const PointMatrix& centroids, std::int64_t f) {
+/// How far the smooth surface through a quad's corners lies beyond the quad, on average over
+/// the quad, along u_f. A surface with normal curvatures κ_a, κ_b along the quad's sides (lengths
+/// a, b) is z = −(κ_a x² + κ_b y²)/2 over its tangent plane; through the corners (±a/2, ±b/2) the
+/// quad is the plane z = −(κ_a a² + κ_b b²)/8, so the surface lies above it by
+/// (κ_a (a²/4 − x²) + κ_b (b²/4 − y²))/2: (κ_a a² + κ_b b²)/8 at the centre (the sagitta) and
+/// (κ_a a² + κ_b b²)/12 on average over the quad, two thirds of it. The normal curvature across
+/// edge e is taken from the faces g, g' across the two sides parallel to it:
+/// (u_g − u_g')·(c_g − c_g') / |c_g − c_g'|² (c: centroids; 1/R on a sphere of radius R).
+double mean_height_over_quad(const DigitalSurface& surface, const PointMatrix& positions, const PointMatrix& normals,
+                             const PointMatrix& centroids, std::int64_t f) {
     double height = 0;
     for (int e = 0; e < 2; ++e) {
         // Sides e and e + 2 face each other; their neighbours lie along side e + 1.
@@ -36,14 +38,18 @@ double sagitta(const DigitalSurface& surface, const PointMatrix& positions, cons
         if (!(length2 > 0)) continue;
         const double curvature = (normals.row(g2) - normals.row(g)).dot(dc) / length2;
         const double side = (positions.row(surface.quads(f, (e + 2) % 4)) - positions.row(surface.quads(f, e + 1))).norm();
-        height += curvature * side * side / 8.0;
+        height += curvature * side * side / 12.0;
     }
     return height;
 }
 
 /// Per face: how far the regularized surface moved along u_f from the surfel centre, measured
-/// at the smooth surface through the quad's corners (centroid + sagitta), not at the centroid,
-/// which lies inside a convex surface by the sagitta (0.08 voxel on a tube 1.5 voxels in radius).
+/// as the mean over the quad of the smooth surface through its corners (centroid + two thirds of
+/// the sagitta): the surfel centre is its surfel's mean point, so it is compared with the mean of
+/// the surface patch that replaces the surfel. Not at the centroid (the flat quad), which lies
+/// inside a convex surface (by 0.05 voxel on a tube 1.5 voxels in radius), nor at the patch's
+/// apex (centroid + sagitta), which lies beyond its mean and so pulled small round objects in (a
+/// ball 5.5 voxels in radius lost 3 % of its volume; docs/accuracy.md).
 Eigen::VectorXd face_offsets(const DigitalSurface& surface, const PointMatrix& positions, const PointMatrix& normals) {
     const PointMatrix centres = surfel_centers(surface);
     const PointMatrix centroids = quad_centroids(surface, positions);
@@ -51,7 +57,7 @@ Eigen::VectorXd face_offsets(const DigitalSurface& surface, const PointMatrix& p
 #pragma omp parallel for schedule(static)
     for (std::int64_t f = 0; f < surface.face_count(); ++f)
         offset[f] = normals.row(f).dot(centroids.row(f) - centres.row(f)) +
-                    sagitta(surface, positions, normals, centroids, f);
+                    mean_height_over_quad(surface, positions, normals, centroids, f);
     return offset;
 }
 
