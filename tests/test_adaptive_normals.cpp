@@ -149,6 +149,45 @@ TEST(AdaptiveNormals, RadiusNeverExceedsTheLocalThicknessOfAThinTubeAndShell) {
     }
 }
 
+TEST(AdaptiveNormals, OnALabelMapEachFaceFollowsTheThicknessOfItsTwoLabels) {
+    // A label map (voxel units): an ellipsoid (label 1, thick) wrapped in a shell 2 voxels thick
+    // (label 2) in the background. Every face of the complex bounds the shell, so its radius stays within the
+    // local thickness of the shell, although the union of the labels is a thick solid; and it
+    // stays within that of the face's other label (brute force on each label's indicator).
+    const ImplicitShape shell =
+        make_shape("(0.1111111*x^2+0.25*y^2+0.4444444*z^2-1)*(0.0816327*x^2+0.16*y^2+0.25*z^2-1)", 4);
+    const ImplicitShape core = make_shape("0.1111111*x^2+0.25*y^2+0.4444444*z^2-1", 4);
+    const BinaryVolume shell_voxels = digitize(shell, 0.25), core_voxels = digitize(core, 0.25);
+    ASSERT_EQ(shell_voxels.grid.dims, core_voxels.grid.dims);
+    LabelVolume labels = test::make_labels(shell_voxels.grid.dims, [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+        return shell_voxels.inside(i, j, k) ? 2 : core_voxels.inside(i, j, k) ? 1 : 0;
+    });
+    const DigitalSurface surface = extract_digital_surface(labels, Connectivity::TwentySix);
+    BinaryVolume union_voxels = test::indicator(labels, 1);
+    for (std::size_t q = 0; q < union_voxels.mask.size(); ++q) union_voxels.mask[q] |= labels.labels[q] != 0;
+    const AdaptiveNormalOptions options = pipeline_options(union_voxels);
+    const AdaptiveNormalField field = adaptive_integral_invariant_normals(labels, surface, options);
+    std::vector<std::vector<float>> to_other(3);
+    std::vector<BinaryVolume> indicators;
+    for (std::uint32_t l = 0; l < 3; ++l) {
+        indicators.push_back(test::indicator(labels, l));
+        to_other[l] = euclidean_distance_transform(indicators[l], DistanceTarget::background);
+    }
+    for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+        const Surfel& s = surface.surfels[std::size_t(f)];
+        const FaceLabels& l = surface.face_labels[std::size_t(f)];
+        ASSERT_TRUE(l.inner == 2 || l.outer == 2) << "face " << f;
+        const Index3 v{s.voxel[0], s.voxel[1], s.voxel[2]};
+        Index3 w = v;
+        w[std::size_t(s.axis)] += s.sign;
+        const double inner = 2 * half_local_thickness(indicators[l.inner], to_other[l.inner], v, options.max_radius);
+        EXPECT_LE(field.radius[f], inner + 1e-9) << "face " << f;
+        const double outer = 2 * half_local_thickness(indicators[l.outer], to_other[l.outer], w, options.max_radius);
+        EXPECT_LE(field.radius[f], outer + 1e-9) << "face " << f;
+        EXPECT_LT(field.radius[f], 4.0) << "face " << f << ": the shell is 2 voxels thick";
+    }
+}
+
 /// Mean angle between a field and the true normals of `shape`, in degrees.
 double mean_error(const ImplicitShape& shape, const DigitalSurface& surface, const PointMatrix& u) {
     const PointMatrix truth = exact_normals(shape, surface);
