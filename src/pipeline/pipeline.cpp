@@ -41,16 +41,14 @@ void check_weight_flags(const PipelineOptions& o) {
     validate_weights(global_weights(o), 0, 0);
 }
 
-/// The faces' reach for the thin-part data weights (empty when --alpha-reach 0): the adaptive
-/// field's, else measured along the field used.
+/// The faces' reach for the thin-part data weights (empty when --alpha-reach 0), measured along
+/// the field used, whatever made it: so a field read back from --export-normals gives the same
+/// weights, and so the same mesh (the adaptive field's own reach follows its first field).
 Eigen::VectorXd thin_part_reach(const RegularizationExtensions& o, const VoxelLabels& volume,
                                 const DigitalSurface& surface, const NormalField& field) {
     const double reference = alpha_reach(o, volume.grid());
     if (reference <= 0) return {};
     const double cap = reference + volume.grid().spacing.maxCoeff();
-    // 13 voxels against 12 + 1: equal but for the round-off of the spacing, which must not choose
-    // between the two measures (a float32 affine moved vertices by 3e-3 voxel).
-    if (field.adaptive && field.adaptive->reach_cap >= cap * (1 - 1e-9)) return field.adaptive->reach.smallest();
     SurfelReach reach = surfel_reach(volume, surface, field.normals, cap);
     return max_over_rings(surface, reach.smallest(), AdaptiveNormalOptions{}.reach_rings);
 }
