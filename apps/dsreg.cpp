@@ -2,7 +2,6 @@
 #include <CLI/CLI.hpp>
 #include <cstdlib>
 #include <iostream>
-#include <unistd.h>
 
 #include "dsreg/error.hpp"
 #include "convergence_command.hpp"
@@ -11,23 +10,8 @@
 #include "regularize_command.hpp"
 #include "view_command.hpp"
 
-namespace {
-
-/// OpenMP workers that spin while waiting take the cores from the ones doing the work as soon as
-/// anything else runs on the machine (measured: bunny-128 8 s instead of 2.3 s under load). The
-/// OpenMP runtime reads OMP_WAIT_POLICY when it is loaded, before main, so when the user has not
-/// chosen a policy, run this program again with the passive one (sleeping workers). Returns
-/// only if that was not needed or not possible.
-void restart_with_passive_openmp_waiting(char** argv) {
-    if (std::getenv("OMP_WAIT_POLICY") != nullptr) return;
-    if (setenv("OMP_WAIT_POLICY", "passive", 1) != 0) return;
-    execv("/proc/self/exe", argv);  // on failure, go on with the runtime's default policy
-}
-
-}  // namespace
-
 int main(int argc, char** argv) {
-    restart_with_passive_openmp_waiting(argv);
+    dsreg::cli::restart_with_passive_openmp_waiting(argv);
     CLI::App app{"dsreg: smooth quad meshes from 3D binary images (digital surface regularization, DGCI 2017)",
                  "dsreg"};
     app.require_subcommand(1);

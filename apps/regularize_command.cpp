@@ -1,9 +1,10 @@
 // dsreg CLI — `dsreg regularize`: the flags of the pipeline (include/dsreg/pipeline.hpp), its
-// stage lines and its summary line. Everything else happens in the library.
+// stage lines and its summary line, shared with dsreg-mpi. Everything else happens in the library.
 #include "regularize_command.hpp"
 
 #include <unistd.h>
 
+#include <cstdlib>
 #include <iostream>
 #include <memory>
 
@@ -123,6 +124,20 @@ void add_regularization_extension_options(CLI::App& command, RegularizationExten
     command.add_option("--gamma-file", o.gamma_file, "Per-vertex gamma multipliers: text file, one value per vertex in mesh order");
 }
 
+/// --block-size N or X,Y,Z into the block options; the block flags need it.
+void apply_block_flags(RegularizeCommand& c) {
+    BlockOptions& blocks = c.options.blocks;
+    const std::vector<std::int64_t>& size = c.flags.block_size;
+    if (!size.empty()) {
+        const std::size_t n = size.size();
+        if (n == 2) throw Error("--block-size: give one size N or three X,Y,Z");
+        for (int a = 0; a < 3; ++a) blocks.block_size[a] = size[n == 1 ? 0 : std::size_t(a)];
+        for (std::int64_t s : blocks.block_size)
+            if (s <= 0) throw Error("--block-size " + std::to_string(s) + ": block sizes must be positive");
+    }
+    if (!blocks.enabled() && blocks.halo) throw Error("--block-halo only applies with --block-size");
+    if (!blocks.enabled() && blocks.schwarz_sweeps != 0) throw Error("--schwarz-sweeps only applies with --block-size");
+}
 
 }  // namespace
 
@@ -147,26 +162,40 @@ void apply_flags(RegularizeCommand& c) {
     for (const CLI::Option* option : f.at_only)
         if (option->count() > 0 && !at) throw Error(option->get_name() + " only applies to --normals at");
     if (at) parse_epsilon_range(f.at_epsilon, normals.at);
+    apply_block_flags(c);
 }
 
-namespace {
-
-/// On stderr, as each stage ends: "dsreg: surface    0.024 s  37590 surfels, …".
-ProgressCallback stage_lines(bool shown) {
-    if (!shown) return {};
-    return [](const ProgressEvent& event) {
-        if (!event.finished) return;
-        std::cerr << "dsreg: " << event.stage << ' ' << format("%8.3f s", event.seconds)
-                  << (event.detail.empty() ? "" : "  " + event.detail) << '\n';
-    };
-}
-
-void run(RegularizeCommand& c) {
+void apply_and_check_flags(RegularizeCommand& c) {
     apply_flags(c);
     check_pipeline_options(c.options, !c.source.shape.empty());
     check_multi_label_options(c.source, c.options);
     check_pipeline_outputs(c.outputs);
-    const ProgressCallback progress = stage_lines(!c.flags.quiet && (c.flags.verbose || isatty(STDERR_FILENO)));
+}
+
+ProgressCallback stage_lines(bool shown, const std::string& prefix) {
+    if (!shown) return {};
+    return [prefix](const ProgressEvent& event) {
+        if (!event.finished) return;
+        std::cerr << prefix << event.stage << ' ' << format("%8.3f s", event.seconds)
+                  << (event.detail.empty() ? "" : "  " + event.detail) << '\n';
+    };
+}
+
+bool stage_lines_shown(const CliFlags& flags) { return !flags.quiet && (flags.verbose || isatty(STDERR_FILENO)); }
+
+void restart_with_passive_openmp_waiting(char** argv) {
+    if (std::getenv("OMP_WAIT_POLICY") != nullptr) return;
+    if (setenv("OMP_WAIT_POLICY", "passive", 1) != 0) return;
+    execv("/proc/self/exe", argv);  // on failure, go on with the runtime's default policy
+}
+
+namespace {
+
+void run(RegularizeCommand& c) {
+    apply_and_check_flags(c);
+    if (!c.outputs.fragments.empty() && !c.options.blocks.enabled())
+        throw Error("--fragments needs a block-wise run: give --block-size (or run dsreg-mpi)");
+    const ProgressCallback progress = stage_lines(stage_lines_shown(c.flags), "dsreg: ");
     PipelineResult result = run_pipeline(c.source, c.options, progress);
     write_pipeline_outputs(result, c.options, c.outputs, c.source, progress);
     if (c.flags.quiet) return;
@@ -196,8 +225,12 @@ void add_pipeline_flags(CLI::App& command, RegularizeCommand& c) {
     command.add_option("--solver", c.flags.solver,
                        "Linear solver: auto (cholmod for small systems and tiny alpha, else amg), cholmod (sparse "
                        "Cholesky), amg (CG preconditioned by smoothed aggregation multigrid) or cg (block-Jacobi CG); "
-                       "iterative solvers stop once their error bound is below 5e-5 voxel")
+                       "iterative solvers stop once their error bound is below --max-error")
         ->check(CLI::IsMember(solver_names()))
+        ->capture_default_str();
+    command.add_option("--max-error", c.options.max_error_voxels,
+                       "Iterative solvers stop once their provable bound on the distance to the exact solution is "
+                       "below this, in voxels")
         ->capture_default_str();
     command.add_flag("--no-repair", c.flags.no_repair,
                      "Keep the mesh as solved: self-intersections and faces folded against u are counted and reported "
@@ -211,19 +244,41 @@ void add_pipeline_flags(CLI::App& command, RegularizeCommand& c) {
                        "colours by deviation from u, displacement, feature map; the run's summary (docs/viewer.md)");
 }
 
+void add_block_flags(CLI::App& command, RegularizeCommand& c) {
+    command.add_option("--block-size", c.flags.block_size,
+                       "Block-wise streaming: read and solve the volume in blocks of N (or X,Y,Z) voxels, each with a "
+                       "halo, and weld them into one mesh (memory of one block; docs/scaling.md)")
+        ->delimiter(',')
+        ->expected(1, 3);
+    command.add_option("--block-halo", c.options.blocks.halo,
+                       "Halo of each block, voxels (default: from --alpha and --beta, about 2.5 sqrt(beta/alpha))");
+    command.add_option("--schwarz-sweeps", c.options.blocks.schwarz_sweeps,
+                       "Overlapping Schwarz sweeps after the first block-wise pass: each brings the mesh closer to the "
+                       "whole-volume solve")
+        ->capture_default_str();
+    command.add_option("--fragments", c.outputs.fragments,
+                       "Block-wise runs: also write one PLY mesh per block (vertex property 'key': global vertex id) "
+                       "and manifest.json into this folder");
+}
+
+void add_regularize_flags(CLI::App& command, RegularizeCommand& c) {
+    command.add_option("input", c.source.input_path,
+                       "Volume file: .nii .nii.gz .hdr/.img .nrrd .nhdr .mha .mhd .tif .h5 .vtk .dcm .npy .vol "
+                       ".longvol .pgm3d .raw, or a folder holding a DICOM series");
+    command.add_option("-o,--output", c.outputs.mesh,
+                       "Output mesh: .obj .off .ply .vtk .vtp (quads) or .stl (triangles); .vtk and .vtp are 3D "
+                       "Slicer's model formats")
+        ->required();
+    add_pipeline_flags(command, c);
+    add_block_flags(command, c);
+    command.add_flag("-q,--quiet", c.flags.quiet, "Print nothing but errors");
+    command.add_flag("-v,--verbose", c.flags.verbose, "Print each stage as it finishes");
+}
+
 void add_regularize_command(CLI::App& app) {
     auto c = std::make_shared<RegularizeCommand>();
     CLI::App* cmd = app.add_subcommand("regularize", "Regularize the digital surface of a volume into a smooth quad mesh");
-    cmd->add_option("input", c->source.input_path,
-                    "Volume file: .nii .nii.gz .hdr/.img .nrrd .nhdr .mha .mhd .tif .h5 .vtk .dcm .npy .vol .longvol "
-                    ".pgm3d .raw, or a folder holding a DICOM series");
-    cmd->add_option("-o,--output", c->outputs.mesh,
-                    "Output mesh: .obj .off .ply .vtk .vtp (quads) or .stl (triangles); .vtk and .vtp are 3D Slicer's "
-                    "model formats")
-        ->required();
-    add_pipeline_flags(*cmd, *c);
-    cmd->add_flag("-q,--quiet", c->flags.quiet, "Print nothing but errors");
-    cmd->add_flag("-v,--verbose", c->flags.verbose, "Print each stage as it finishes");
+    add_regularize_flags(*cmd, *c);
     cmd->callback([c] { run(*c); });
 }
 

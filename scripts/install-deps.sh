@@ -13,6 +13,8 @@
 #   scripts/install-deps.sh --viewer also Chromium, which opens the HTML pages headless (the
 #                                    viewer's browser test, scripts/render.sh), and Python's PIL,
 #                                    with which the test reads the screenshots
+#   scripts/install-deps.sh --mpi    also OpenMPI and PETSc (3.18, with hypre), for dsreg-mpi and
+#                                    its tests (docs/scaling.md)
 # libjs-three is a build dependency: three.js is inlined into dsreg's HTML pages (docs/viewer.md).
 set -euo pipefail
 packages=(build-essential cmake pkg-config libeigen3-dev libsuitesparse-dev libopenblas-dev zlib1g-dev
@@ -29,7 +31,8 @@ for option in "$@"; do
         --fuzz) packages+=("${dev[@]}" clang libclang-rt-14-dev libomp-dev) ;;
         --python) packages+=("${python[@]}"); with_python=true ;;
         --viewer) packages+=(chromium python3-pil) ;;
-        *) echo "usage: $0 [--dev] [--bench] [--fuzz] [--python] [--viewer]" >&2; exit 2 ;;
+        --mpi) packages+=(openmpi-bin libopenmpi-dev petsc-dev) ;;
+        *) echo "usage: $0 [--dev] [--bench] [--fuzz] [--python] [--viewer] [--mpi]" >&2; exit 2 ;;
     esac
 done
 $with_dev && $with_python && packages+=("${python_dev[@]}")

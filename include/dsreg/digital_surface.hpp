@@ -93,6 +93,17 @@ DigitalSurface extract_digital_surface(const BinaryVolume& volume, Connectivity 
 /// applies to each label's own indicator. Throws dsreg::Error if no voxel has a label.
 DigitalSurface extract_digital_surface(const LabelVolume& volume, Connectivity connectivity);
 
+/// Pointel (a,b,c) of corner `corner` (0–3, the order of DigitalSurface::quads: counter-clockwise
+/// seen from outside) of surfel s, in the voxel coordinates of s.
+std::array<std::int64_t, 3> surfel_corner_pointel(const Surfel& s, int corner);
+
+/// Labels the connected components of the faces (face_component, component_count) from
+/// adjacent_face (and adjacent_face_outer on a label complex).
+void label_components(DigitalSurface& surface);
+
+/// Pointels that carry more than one vertex (from vertex_pointels).
+std::int64_t count_split_pointels(const DigitalSurface& surface);
+
 /// Physical centre of each surfel (m×3).
 PointMatrix surfel_centers(const DigitalSurface& surface);
 

@@ -119,6 +119,14 @@ ImplicitShape make_plane_shape(const Eigen::Vector3d& normal, double offset, dou
 /// Throws dsreg::Error for h ≤ 0 or non-finite, an invalid box, or more than 2^34 voxels.
 BinaryVolume digitize(const ImplicitShape& shape, double h);
 
+/// The grid of digitize(shape, h) (dims, spacing, origin), without digitizing. Same checks.
+VoxelGrid digitization_grid(const ImplicitShape& shape, double h);
+
+/// The voxels of `box` (non-empty, inside the grid of digitize(shape, h)) of that digitization,
+/// bit for bit, with memory for the box alone: grid.dims = box.size(), origin = the centre of
+/// the box's first voxel. Throws dsreg::Error as digitize does, or for a box outside the grid.
+BinaryVolume digitize_box(const ImplicitShape& shape, double h, const VoxelBox& box);
+
 /// Unit outward normal ∇F/|∇F| at p. Throws dsreg::Error where ∇F = 0 (singular point).
 Eigen::Vector3d true_normal(const ImplicitShape& shape, const Eigen::Vector3d& p);
 

@@ -24,6 +24,7 @@
 
 #include "dsreg/adaptive_normals.hpp"
 #include "dsreg/ambrosio_tortorelli.hpp"
+#include "dsreg/blocks.hpp"
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/html_view.hpp"
 #include "dsreg/implicit_shape.hpp"
@@ -95,6 +96,22 @@ LoadedVolume load_volume(const VolumeSource& source);
 /// The fraction of the voxels above which the object is probably not the intended one.
 constexpr double kMostOfTheVolume = 0.5;
 
+/// What the pipeline knows of a volume before reading its voxels, for block-wise runs: the
+/// LoadedVolume that load_volume would return, with an empty mask (grid, description, shape, h
+/// set), from the file's header alone or the shape's digitization grid (arrays are refused). --max-memory is not
+/// applied (block-wise runs never hold the whole mask). Throws dsreg::Error as load_volume does.
+LoadedVolume probe_volume(const VolumeSource& source);
+
+/// The voxels of `box` of the volume that `header` (from probe_volume) describes, read by
+/// offsets where the format allows (read_volume_box) or digitized over the box alone
+/// (digitize_box): grid with the header's spacing, dims = box.size(), origin = the centre of
+/// the box's first voxel.
+BinaryVolume load_volume_box(const VolumeSource& source, const LoadedVolume& header, const VoxelBox& box);
+
+/// The error for an object without any voxel: names the input and the value range used (and,
+/// for a file whose values can be read within the limits, the range its values span).
+Error empty_object_error(const VolumeSource& source, bool read_value_range);
+
 /// The values of the volume file of `source` (not thresholded; volume_io.hpp's
 /// read_volume_values) with the same limits, raw layout and --spacing as load_volume.
 ScalarVolume load_volume_values(const VolumeSource& source, VolumeFileInfo* info = nullptr);
@@ -157,6 +174,19 @@ void check_normal_field_options(const NormalFieldOptions& options, bool input_is
 /// below 5 voxels; voxel = the largest spacing.
 AdaptiveNormalOptions default_adaptive_options(const NormalFieldOptions& options, const LoadedVolume& loaded);
 
+/// How far from a face the normal field of these options looks, for block-wise runs: the field
+/// must be the same in every block, so the options come back with the radius the whole-volume
+/// run would use filled in.
+struct NormalFieldReach {
+    NormalFieldOptions options;  ///< with `radius` set for ii and ctrivial
+    double volume_radius = 0;    ///< the ball of voxels each face reads (ii), physical units
+    double surface_radius = 0;   ///< the ball of surfels each face reads (ctrivial), physical units
+};
+
+/// Throws dsreg::Error for fields that need the whole surface at once (--normals at: its
+/// Ambrosio–Tortorelli solve is global; --normals-file: the file lists the whole surface).
+NormalFieldReach normal_field_reach(const NormalFieldOptions& options, const LoadedVolume& header);
+
 /// The integral-invariant (or convolved trivial) radius used when --radius is not given (and the
 /// field is not the adaptive one: --ii-extrapolate, --normals ctrivial): for a
 /// shape the multigrid-convergent 3·h^(1/3) (DESIGN.md), at most 1/8 of the largest side of its
@@ -209,6 +239,16 @@ void check_regularization_extensions(const RegularizationExtensions& options);
 // ---------------------------------------------------------------------------------------------
 // The whole run.
 
+/// Block-wise streaming (block_pipeline.hpp): the volume is read and solved block by block, each
+/// with a halo, and the blocks are welded into one mesh.
+struct BlockOptions {
+    Index3 block_size{0, 0, 0};        ///< --block-size (voxels); 0: the whole volume at once
+    std::optional<std::int64_t> halo;  ///< --block-halo (voxels); unset: default_block_halo
+    int schwarz_sweeps = 0;            ///< --schwarz-sweeps: overlapping Schwarz sweeps after the first pass
+
+    bool enabled() const { return block_size[0] > 0; }
+};
+
 /// What happens to the solved mesh (mesh_validity.hpp, validity_repair.hpp, docs/validity.md).
 enum class ValidityMode {
     Repair,  ///< checked for self-intersections and faces folded against u, repaired until valid (default)
@@ -221,7 +261,11 @@ struct PipelineOptions {
     NormalFieldOptions normals;
     double alpha = 1e-3, beta = 1.0, gamma = 1e-2;  ///< --alpha --beta --gamma (eq. 1)
     SolverKind solver = SolverKind::Auto;           ///< --solver
+    /// --max-error: iterative solvers stop once their error bound is below this, in voxels
+    /// (the smallest voxel side).
+    double max_error_voxels = kDefaultMaxErrorVoxels;
     RegularizationExtensions extensions;
+    BlockOptions blocks;
     ValidityMode validity = ValidityMode::Repair;   ///< --no-repair, --no-check
 };
 
@@ -250,6 +294,7 @@ struct PipelineResult {
     std::optional<ValidityRepairReport> validity;
     nlohmann::json extension_report;  ///< "metric", "local_weights", "shrink_correction", and "clamp" with --clamp
     std::vector<std::pair<std::string, double>> stage_seconds;  ///< wall time of each stage, in order
+    std::optional<BlockLayout> block_layout;  ///< the blocks of a block-wise run (streaming or MPI)
     // Label maps only (--multi-label; empty otherwise):
     std::vector<LabelMesh> label_meshes;        ///< the closed surface of each label
     std::vector<LabelMeasures> label_measures;  ///< faces, area, volume, topology of each
@@ -281,6 +326,7 @@ struct PipelineOutputs {
     std::string features;      ///< --features: AT feature lines as OBJ polylines
     std::string report;        ///< --report: JSON
     std::string html;          ///< --html: a self-contained page showing the result (result_page)
+    std::string fragments;     ///< --fragments DIR: one mesh per block and manifest.json (block-wise runs)
     bool triangulate = false;  ///< --triangulate
     /// --space: the coordinates of the meshes and feature lines (world_space.hpp). The files record
     /// it as 3D Slicer does ("SPACE=LPS") when the input has a world geometry (medical formats,
@@ -291,7 +337,7 @@ struct PipelineOutputs {
     /// Whether any file is to be written.
     bool any() const {
         return !mesh.empty() || !input_mesh.empty() || !normals.empty() || !features.empty() || !report.empty() ||
-               !html.empty();
+               !html.empty() || !fragments.empty();
     }
 };
 

@@ -19,6 +19,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <string>
+#include <vector>
 
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/mesh.hpp"
@@ -70,6 +71,11 @@ RegularizationSystem assemble_regularization_system(const PointMatrix& positions
 /// α · min_i α_i w0_i: the data term alone bounds the smallest eigenvalue of R from below (R is
 /// αW0_α ⊗ I3 plus positive semi-definite terms, eq. 25).
 double smallest_eigenvalue_bound(const RegularizationWeights& weights, std::int64_t vertex_count);
+
+/// α · min of α_i w0_i over the vertices i with selected[i] (+∞ if none): the same bound for a
+/// principal submatrix of R (the rows and columns of those vertices), or for a part of the
+/// vertices whose minimum is combined with the others' (block-wise and MPI runs).
+double smallest_eigenvalue_bound(const RegularizationWeights& weights, const std::vector<char>& selected);
 
 /// Evaluates the terms of eq. (1) face by face and vertex by vertex (no matrices).
 EnergyTerms regularization_energy(const PointMatrix& candidate, const PointMatrix& positions, const FaceMatrix& quads,

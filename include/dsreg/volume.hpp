@@ -52,6 +52,28 @@ struct VoxelGrid {
     }
 };
 
+/// Voxels lo ≤ (i,j,k) < hi of a grid (half-open on each axis).
+struct VoxelBox {
+    Index3 lo{0, 0, 0};
+    Index3 hi{0, 0, 0};
+
+    bool empty() const { return hi[0] <= lo[0] || hi[1] <= lo[1] || hi[2] <= lo[2]; }
+    Index3 size() const { return {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}; }
+    std::int64_t voxel_count() const { return empty() ? 0 : size()[0] * size()[1] * size()[2]; }
+    bool contains(std::int64_t i, std::int64_t j, std::int64_t k) const {
+        return i >= lo[0] && j >= lo[1] && k >= lo[2] && i < hi[0] && j < hi[1] && k < hi[2];
+    }
+    /// Whether `box` lies inside (an empty box lies inside any box).
+    bool contains(const VoxelBox& box) const;
+    /// Grown by `margin` voxels on every side (shrunk if negative).
+    VoxelBox grown(std::int64_t margin) const;
+    /// Grown by margin[a] voxels on both sides of axis a.
+    VoxelBox grown(const Index3& margin) const;
+    /// The part inside a grid of `dims` voxels.
+    VoxelBox clipped(const Index3& dims) const;
+    bool operator==(const VoxelBox& other) const { return lo == other.lo && hi == other.hi; }
+};
+
 /// A binary image: mask[linear_index] != 0 for object voxels.
 struct BinaryVolume {
     VoxelGrid grid;

@@ -109,6 +109,20 @@ BinaryVolume read_raw(const std::string& path, const RawVolumeLayout& layout, co
 BinaryVolume read_volume(const std::string& path, const ValueRange& range = {}, const RawVolumeLayout* raw_layout = nullptr,
                          const VolumeLimits& limits = {}, VolumeFileInfo* info = nullptr);
 
+/// The dimensions of a volume file (what read_volume gives as grid.dims), from its header alone,
+/// after the same checks of the header against the file size. Any format read_volume accepts.
+Index3 read_volume_dims(const std::string& path, const RawVolumeLayout* raw_layout = nullptr, const VolumeLimits& limits = {});
+
+/// The voxels of `box` of a volume file (a non-empty box inside its grid), as read_volume would
+/// give them, with memory for the box alone: grid.dims = box.size(), spacing (1,1,1), origin
+/// (0,0,0) (place it with the box). Stored payloads (.raw, .vol and .longvol version 2, binary
+/// .pgm3d) are read by offsets, row by row of the box; zlib and ASCII payloads are decoded from
+/// the start, keeping the box (the time of the whole file, the memory of the box). The header
+/// and payload size checks are those of read_volume; values outside the box are not decoded,
+/// so not checked (e.g. against a PGM maxval). Throws dsreg::Error naming the file.
+BinaryVolume read_volume_box(const std::string& path, const VoxelBox& box, const ValueRange& range = {},
+                             const RawVolumeLayout* raw_layout = nullptr, const VolumeLimits& limits = {});
+
 /// The voxel values of a volume file, any format read_volume accepts (same extension rules,
 /// same checks, same errors), without thresholding. PGM values are checked against maxval.
 ScalarVolume read_volume_values(const std::string& path, const RawVolumeLayout* raw_layout = nullptr,

@@ -80,6 +80,12 @@ EXCLUDED_REGULARIZE_FLAGS = {
     "spacing": "spacing= is an argument of its own (with origin= and affine=)",
     "quiet": "nothing is printed; progress= receives the stages",
     "verbose": "nothing is printed; progress= receives the stages",
+    # Block-wise streaming (docs/scaling.md) reads a volume file block by block, for volumes
+    # larger than memory: the command line's (dsreg regularize --block-size, dsreg-mpi).
+    "block-size": "block-wise streaming of a file larger than memory: dsreg regularize --block-size",
+    "block-halo": "a flag of block-wise streaming (dsreg regularize --block-size)",
+    "schwarz-sweeps": "a flag of block-wise streaming (dsreg regularize --block-size)",
+    "fragments": "a flag of block-wise streaming (dsreg regularize --block-size)",
 }
 
 #: The flags of ``dsreg eval`` that are not keyword options of evaluate(), and why.

@@ -163,6 +163,21 @@ double default_field_radius(const NormalFieldOptions& o, const std::string& kind
     return ii && o.ii_extrapolate ? 2.0 * radius : radius;
 }
 
+NormalFieldReach normal_field_reach(const NormalFieldOptions& o, const LoadedVolume& header) {
+    if (field_kind(o) == "at")
+        throw Error("--normals at cannot run block by block: its Ambrosio-Tortorelli solve couples the whole surface");
+    if (!o.file.empty())
+        throw Error("--normals-file cannot be read block by block: the file lists the field of the whole surface");
+    NormalFieldReach reach;
+    reach.options = o;
+    const std::string kind = input_kind(o);
+    if (kind != "ii" && kind != "ctrivial") return reach;
+    const double radius = o.radius ? *o.radius : default_field_radius(o, kind, header);
+    reach.options.radius = radius;
+    (kind == "ii" ? reach.volume_radius : reach.surface_radius) = radius;
+    return reach;
+}
+
 void parse_epsilon_range(const std::string& text, AmbrosioTortorelliParameters& at) {
     const std::size_t colon = text.find(':');
     if (colon == std::string::npos) {

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "dsreg/atomic_file.hpp"
+#include "dsreg/block_pipeline.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
 #include "dsreg/grid_placement.hpp"
@@ -160,7 +161,7 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
                                     result.weights);
     SolverOptions solver;
     solver.kind = o.solver;
-    solver.max_error_voxels = kDefaultMaxErrorVoxels;  // iterative solvers: within 5e-5 voxel of the exact answer
+    solver.max_error_voxels = o.max_error_voxels;  // iterative solvers: within this of the exact answer
     result.regularization = run_regularization(o.extensions, loaded.volume, result.surface, result.field.normals,
                                                result.weights, solver, result.extension_report);
     clock.finish(result.regularization.solve.solver + ", relative residual " +
@@ -287,6 +288,8 @@ double total_seconds(const PipelineResult& result) {
 void check_pipeline_options(const PipelineOptions& o, bool input_is_shape) {
     check_normal_field_options(o.normals, input_is_shape);
     check_weight_flags(o);
+    if (!(o.max_error_voxels > 0) || !std::isfinite(o.max_error_voxels))
+        throw Error("--max-error " + format("%g", o.max_error_voxels) + ": must be positive and finite (voxels)");
     check_regularization_extensions(o.extensions);
 }
 
@@ -318,6 +321,7 @@ PipelineResult run_pipeline(const LoadedVolume& loaded, const PipelineOptions& o
 }
 
 PipelineResult run_pipeline(const VolumeSource& source, const PipelineOptions& options, const ProgressCallback& progress) {
+    if (options.blocks.enabled()) return run_streaming_pipeline(source, options, progress);
     if (!source.max_memory.empty()) parse_memory_size("--max-memory", source.max_memory);
     check_pipeline_options(options, !source.shape.empty());
     check_multi_label_options(source, options);
@@ -370,6 +374,8 @@ void check_pipeline_outputs(const PipelineOutputs& o) {
             throw Error("--features " + o.features + ": the feature lines are written as OBJ polylines (use .obj)");
         check_output_folder("--features", o.features);
     }
+    if (!o.fragments.empty() && std::filesystem::exists(o.fragments) && !std::filesystem::is_directory(o.fragments))
+        throw Error("--fragments " + o.fragments + ": exists and is not a folder");
     check_distinct_outputs({{"-o", o.mesh},
                             {"--input-mesh", o.input_mesh},
                             {"--report", o.report},
@@ -396,6 +402,10 @@ void write_pipeline_outputs(PipelineResult& result, const PipelineOptions& optio
     if (!outputs.features.empty())
         write_feature_lines(outputs.features, options.normals, result.field, result.surface,
                             map_points(grid_to_space(result.grid, outputs.space), result.regularization.positions));
+    if (!outputs.fragments.empty()) {
+        if (!result.block_layout) throw Error("--fragments needs a block-wise run (--block-size, or dsreg-mpi)");
+        write_block_fragments(outputs.fragments, result, *result.block_layout);
+    }
     std::string written = outputs.mesh;
     if (!result.label_meshes.empty() && !outputs.mesh.empty())
         written += " and " + label_text(result.label_meshes.size()) + " (" +
@@ -441,7 +451,8 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
                             {"radius", optional_json(field.radius)},
                             {"ii_kernel", field.ii_kernel ? nlohmann::json(*field.ii_kernel) : nlohmann::json(nullptr)},
                             {"ii_extrapolated", field.ii_extrapolated},
-                            {"solver", solve.solver}, {"triangulate", outputs.triangulate}};
+                            {"solver", solve.solver}, {"max_error_voxels", o.max_error_voxels},
+                            {"triangulate", outputs.triangulate}};
     if (field.adaptive) {
         const AdaptiveNormalField& a = *field.adaptive;
         report["adaptive_ii"] = {{"radius_min", a.radius.minCoeff()},
@@ -476,7 +487,8 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
     report["total_seconds"] = total_seconds(r);
     report["peak_memory_bytes"] = peak_memory_bytes();
     report["outputs"] = {{"mesh", outputs.mesh}, {"input_mesh", outputs.input_mesh},
-                         {"normals", outputs.normals}, {"features", outputs.features}, {"html", outputs.html}};
+                         {"normals", outputs.normals}, {"features", outputs.features}, {"html", outputs.html},
+                         {"fragments", outputs.fragments}};
     if (!r.label_meshes.empty()) {
         nlohmann::json labels = nlohmann::json::array();
         for (const LabelMeasures& m : r.label_measures) labels.push_back(label_json(m, label_output_path(outputs.mesh, m.value)));

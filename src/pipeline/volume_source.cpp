@@ -115,7 +115,8 @@ namespace {
 
 std::string format_number(double x) { return format("%g", x); }
 
-LoadedVolume digitize_shape(const VolumeSource& o) {
+/// A --shape source without its voxels: shape, grid step, grid, description (--max-voxels checked).
+LoadedVolume shape_header(const VolumeSource& o) {
     LoadedVolume loaded;
     if (o.h && (!(*o.h > 0) || !std::isfinite(*o.h))) throw Error("--h must be positive (got " + format_number(*o.h) + ")");
     loaded.shape = make_shape(o.shape, o.box);
@@ -124,13 +125,19 @@ LoadedVolume digitize_shape(const VolumeSource& o) {
     if (cells.prod() > double(o.max_voxels))
         throw Error("--shape " + o.shape + " at --h " + format_number(loaded.h) + " needs about " +
                     format_number(cells.prod()) + " voxels, more than --max-voxels " + std::to_string(o.max_voxels));
+    loaded.description = o.shape + " at h=" + format_number(loaded.h);
+    return loaded;
+}
+
+LoadedVolume digitize_shape(const VolumeSource& o) {
+    LoadedVolume loaded = shape_header(o);
+    const Eigen::Vector3d cells = (loaded.shape->upper - loaded.shape->lower) / loaded.h + Eigen::Vector3d::Constant(3);
     const std::int64_t memory_cap = memory_voxel_cap(o);
     if (cells.prod() > double(memory_cap))
         throw Error("--shape " + o.shape + " at --h " + format_number(loaded.h) + " needs about " +
                     format_number(cells.prod()) + " voxels, more than --max-memory " + o.max_memory + " leaves room for (" +
                     std::to_string(memory_cap) + " voxels)");
     loaded.volume = digitize(*loaded.shape, loaded.h);
-    loaded.description = o.shape + " at h=" + format_number(loaded.h);
     return loaded;
 }
 
@@ -152,6 +159,13 @@ ValueRange object_range(const VolumeSource& o) {
 void check_spacing(const Eigen::Vector3d& spacing) {
     if (!(spacing.array() > 0).all() || !spacing.allFinite())
         throw Error("--spacing: every voxel size must be positive and finite");
+}
+
+/// --spacing, checked, on a grid read from a file.
+void apply_spacing(const VolumeSource& o, VoxelGrid& grid) {
+    if (!o.spacing) return;
+    check_spacing(*o.spacing);
+    grid.spacing = *o.spacing;
 }
 
 /// Runs a reader with the voxel limit of the options, naming --max-memory when it is the bound.
@@ -176,10 +190,7 @@ LoadedVolume read_file(const VolumeSource& o) {
         return read_volume(o.input_path, object_range(o), o.raw_layout ? &*o.raw_layout : nullptr, limits, &loaded.file);
     });
     loaded.description = o.input_path;
-    if (o.spacing) {
-        check_spacing(*o.spacing);
-        loaded.volume.grid.spacing = *o.spacing;
-    }
+    apply_spacing(o, loaded.volume.grid);
     loaded.h = loaded.volume.grid.spacing.maxCoeff();
     return loaded;
 }
@@ -280,6 +291,11 @@ std::string most_of_the_volume_warning(const VolumeSource& o, double fraction) {
            (modes.empty() ? "" : "; the values' main modes are " + modes) + " (choose the object with --label, --min, --max)";
 }
 
+void check_source(const VolumeSource& o) {
+    check_input_choice(o);
+    if (o.max_voxels <= 0) throw Error("--max-voxels must be positive (got " + std::to_string(o.max_voxels) + ")");
+}
+
 /// --multi-label: the label map of the file (every distinct value a label), or the shape's
 /// digitization as the label map {0, 1}; --labels keeps some; --spacing applies.
 LoadedVolume load_label_map(const VolumeSource& o) {
@@ -315,21 +331,52 @@ LoadedVolume load_label_map(const VolumeSource& o) {
 
 }  // namespace
 
+Error empty_object_error(const VolumeSource& o, bool read_value_range) {
+    if (!o.shape.empty()) return Error(o.shape + ": the object is empty");
+    const std::string values = read_value_range ? input_value_range(o) : "";
+    return Error((o.array ? o.array->description : o.input_path) + ": the object is empty: no voxel has " + object_value_range(o) +
+                 (values.empty() ? "" : "; " + values) + " (choose the object's values with --label, --min and --max)");
+}
+
 LoadedVolume load_volume(const VolumeSource& o) {
-    check_input_choice(o);
-    if (o.max_voxels <= 0) throw Error("--max-voxels must be positive (got " + std::to_string(o.max_voxels) + ")");
+    check_source(o);
     if (o.is_multi_label()) return load_label_map(o);
     if (!o.shape.empty()) return digitize_shape(o);
     LoadedVolume loaded = o.array ? threshold_array(o) : read_file(o);
     const std::int64_t object = loaded.volume.object_voxel_count();
-    if (object == 0) {
-        const std::string values = input_value_range(o);
-        throw Error(loaded.description + ": the object is empty: no voxel has " + object_value_range(o) +
-                    (values.empty() ? "" : "; " + values) + " (choose the object's values with --label, --min and --max)");
-    }
+    if (object == 0) throw empty_object_error(o, true);
     const double fraction = double(object) / double(loaded.volume.grid.voxel_count());
     if (fraction > kMostOfTheVolume) loaded.warnings.push_back(most_of_the_volume_warning(o, fraction));
     return loaded;
+}
+
+LoadedVolume probe_volume(const VolumeSource& o) {
+    check_source(o);
+    if (o.array) throw Error(o.array->description + ": block-wise runs read a volume file or a --shape, not an array");
+    if (!o.shape.empty()) {
+        LoadedVolume loaded = shape_header(o);
+        loaded.volume.grid = digitization_grid(*loaded.shape, loaded.h);
+        return loaded;
+    }
+    VolumeLimits limits;
+    limits.max_voxels = o.max_voxels;
+    LoadedVolume loaded;
+    loaded.volume.grid.dims = read_volume_dims(o.input_path, o.raw_layout ? &*o.raw_layout : nullptr, limits);
+    loaded.description = o.input_path;
+    apply_spacing(o, loaded.volume.grid);
+    loaded.h = loaded.volume.grid.spacing.maxCoeff();
+    return loaded;
+}
+
+BinaryVolume load_volume_box(const VolumeSource& o, const LoadedVolume& header, const VoxelBox& box) {
+    if (header.shape) return digitize_box(*header.shape, header.h, box);
+    VolumeLimits limits;
+    limits.max_voxels = o.max_voxels;
+    BinaryVolume volume = read_volume_box(o.input_path, box, object_range(o), o.raw_layout ? &*o.raw_layout : nullptr, limits);
+    const VoxelGrid& grid = header.volume.grid;
+    volume.grid.spacing = grid.spacing;
+    volume.grid.origin = grid.voxel_center(box.lo[0], box.lo[1], box.lo[2]);
+    return volume;
 }
 
 ScalarVolume load_volume_values(const VolumeSource& o, VolumeFileInfo* info) {
@@ -338,10 +385,7 @@ ScalarVolume load_volume_values(const VolumeSource& o, VolumeFileInfo* info) {
     ScalarVolume values = read_within_limits(o, [&](const VolumeLimits& limits) {
         return read_volume_values(o.input_path, o.raw_layout ? &*o.raw_layout : nullptr, limits, info);
     });
-    if (o.spacing) {
-        check_spacing(*o.spacing);
-        values.grid.spacing = *o.spacing;
-    }
+    apply_spacing(o, values.grid);
     return values;
 }
 

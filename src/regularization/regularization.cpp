@@ -309,6 +309,13 @@ double smallest_eigenvalue_bound(const RegularizationWeights& w, std::int64_t ve
     return std::isfinite(smallest) ? w.alpha * smallest : w.alpha;
 }
 
+double smallest_eigenvalue_bound(const RegularizationWeights& w, const std::vector<char>& selected) {
+    double smallest = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < selected.size(); ++i)
+        if (selected[i]) smallest = std::min(smallest, data_weight(w, std::int64_t(i)));
+    return w.alpha * smallest;
+}
+
 EnergyTerms regularization_energy(const PointMatrix& candidate, const PointMatrix& positions, const FaceMatrix& quads,
                                   const VertexLinks& links, const PointMatrix& normals, const RegularizationWeights& weights) {
     const std::int64_t n = positions.rows();

@@ -160,10 +160,16 @@ public:
           h_(h),
           range_{index_range(shape.lower.x(), shape.upper.x(), h, "x"),
                  index_range(shape.lower.y(), shape.upper.y(), h, "y"),
-                 index_range(shape.lower.z(), shape.upper.z(), h, "z")} {}
+                 index_range(shape.lower.z(), shape.upper.z(), h, "z")} {
+        box_.hi = {range_[0].count, range_[1].count, range_[2].count};
+    }
 
     const IndexRange& range(int axis) const { return range_[axis]; }
     double voxel_count() const { return double(range_[0].count) * double(range_[1].count) * double(range_[2].count); }
+
+    /// Digitize only the voxels of `box` (inside the grid); slices and rows are then those of the box.
+    void restrict_to(const VoxelBox& box) { box_ = box; }
+    const VoxelBox& box() const { return box_; }
 
     /// Physical coordinate h·(first + index) of a grid index along an axis.
     double coordinate(int axis, std::int64_t index) const { return h_ * double(range_[axis].first + index); }
@@ -174,38 +180,50 @@ public:
 
     /// Fills x_powers_ and column_in_box_ (after the size checks, as they take memory).
     void prepare_columns() {
-        const std::size_t nx = static_cast<std::size_t>(range_[0].count);
+        const std::size_t nx = static_cast<std::size_t>(box_.size()[0]);
         const int max_power = shape_.polynomial.max_exponent(0);
         x_powers_.assign((static_cast<std::size_t>(max_power) + 1) * nx, 0.0);
         column_in_box_.assign(nx, 0);
         double powers[detail::power_table_size];
         for (std::size_t i = 0; i < nx; ++i) {
-            detail::fill_powers(coordinate(0, std::int64_t(i)), max_power, powers);
+            const std::int64_t index = box_.lo[0] + std::int64_t(i);
+            detail::fill_powers(coordinate(0, index), max_power, powers);
             for (int e = 0; e <= max_power; ++e) x_powers_[static_cast<std::size_t>(e) * nx + i] = powers[e];
-            column_in_box_[i] = in_box(0, std::int64_t(i));
+            column_in_box_[i] = in_box(0, index);
         }
     }
 
-    /// Digitizes slice k into `slice` (nx·ny bytes); `row_sum` is scratch space of nx doubles.
+    /// Digitizes slice k of the grid (box_.lo[2] ≤ k < box_.hi[2]) into `slice` (the box's rows:
+    /// nx·ny bytes of the box); `row_sum` is scratch space of nx doubles.
     void digitize_slice(std::int64_t k, std::uint8_t* slice, std::vector<double>& row_sum) const {
         if (!in_box(2, k)) return;
-        const std::size_t nx = static_cast<std::size_t>(range_[0].count);
+        const std::size_t nx = static_cast<std::size_t>(box_.size()[0]);
         double pz[detail::power_table_size], py[detail::power_table_size];
         detail::fill_powers(coordinate(2, k), shape_.polynomial.max_exponent(2), pz);
-        for (std::int64_t j = 0; j < range_[1].count; ++j) {
+        for (std::int64_t j = box_.lo[1]; j < box_.hi[1]; ++j) {
             if (!in_box(1, j)) continue;
             detail::fill_powers(coordinate(1, j), shape_.polynomial.max_exponent(1), py);
             // The same kernel as Polynomial::value(): identical results at every voxel.
             detail::evaluate_row(shape_.polynomial, py, pz, x_powers_.data(), nx, row_sum.data());
-            std::uint8_t* row = slice + static_cast<std::size_t>(j) * nx;
+            std::uint8_t* row = slice + static_cast<std::size_t>(j - box_.lo[1]) * nx;
             for (std::size_t i = 0; i < nx; ++i) row[i] = (column_in_box_[i] && row_sum[i] <= 0.0) ? 1 : 0;
         }
+    }
+
+    /// The grid of the whole digitization.
+    VoxelGrid voxel_grid() const {
+        VoxelGrid grid;
+        grid.dims = {range_[0].count, range_[1].count, range_[2].count};
+        grid.spacing = Eigen::Vector3d::Constant(h_);
+        grid.origin = Eigen::Vector3d(coordinate(0, 0), coordinate(1, 0), coordinate(2, 0));
+        return grid;
     }
 
 private:
     const ImplicitShape& shape_;
     double h_;
     IndexRange range_[3];
+    VoxelBox box_;
     std::vector<double> x_powers_;
     std::vector<std::uint8_t> column_in_box_;
 };
@@ -692,7 +710,10 @@ ImplicitShape make_plane_shape(const Eigen::Vector3d& normal, double offset, dou
     return ImplicitShape{"plane " + polynomial.to_string(), std::move(polynomial), -half, half, {true, true, true}};
 }
 
-BinaryVolume digitize(const ImplicitShape& shape, double h) {
+namespace {
+
+/// The checked grid of a digitization (at most 2^34 voxels).
+DigitizationGrid checked_digitization_grid(const ImplicitShape& shape, double h) {
     check_digitization_input(shape, h);
     DigitizationGrid grid(shape, h);
     constexpr double max_voxels = 17179869184.0;  // 2^34
@@ -704,11 +725,17 @@ BinaryVolume digitize(const ImplicitShape& shape, double h) {
                 << " voxels), more than the limit of 2^34; use a larger h";
         throw Error(message.str());
     }
+    return grid;
+}
 
+/// The voxels of the grid's box, slice by slice in parallel.
+BinaryVolume digitize_grid(DigitizationGrid& grid) {
+    const VoxelBox& box = grid.box();
     BinaryVolume volume;
-    volume.grid.dims = {grid.range(0).count, grid.range(1).count, grid.range(2).count};
-    volume.grid.spacing = Eigen::Vector3d::Constant(h);
-    volume.grid.origin = Eigen::Vector3d(grid.coordinate(0, 0), grid.coordinate(1, 0), grid.coordinate(2, 0));
+    volume.grid = grid.voxel_grid();
+    volume.grid.origin = volume.grid.voxel_center(box.lo[0], box.lo[1], box.lo[2]);
+    volume.grid.dims = box.size();
+    const double voxels = double(box.voxel_count());
     try {
         volume.mask.assign(static_cast<std::size_t>(voxels), 0);
         grid.prepare_columns();
@@ -716,17 +743,34 @@ BinaryVolume digitize(const ImplicitShape& shape, double h) {
         throw Error("digitize: not enough memory for a grid of " + std::to_string(static_cast<long long>(voxels)) +
                     " voxels");
     }
-
-    const std::int64_t nz = grid.range(2).count;
-    const std::size_t slice_size = static_cast<std::size_t>(grid.range(0).count * grid.range(1).count);
+    const std::size_t slice_size = static_cast<std::size_t>(box.size()[0] * box.size()[1]);
 #pragma omp parallel
     {
-        std::vector<double> row_sum(static_cast<std::size_t>(grid.range(0).count));
+        std::vector<double> row_sum(static_cast<std::size_t>(box.size()[0]));
 #pragma omp for schedule(dynamic)
-        for (std::int64_t k = 0; k < nz; ++k)
-            grid.digitize_slice(k, volume.mask.data() + static_cast<std::size_t>(k) * slice_size, row_sum);
+        for (std::int64_t k = box.lo[2]; k < box.hi[2]; ++k)
+            grid.digitize_slice(k, volume.mask.data() + static_cast<std::size_t>(k - box.lo[2]) * slice_size, row_sum);
     }
     return volume;
+}
+
+}  // namespace
+
+BinaryVolume digitize(const ImplicitShape& shape, double h) {
+    DigitizationGrid grid = checked_digitization_grid(shape, h);
+    return digitize_grid(grid);
+}
+
+VoxelGrid digitization_grid(const ImplicitShape& shape, double h) { return checked_digitization_grid(shape, h).voxel_grid(); }
+
+BinaryVolume digitize_box(const ImplicitShape& shape, double h, const VoxelBox& box) {
+    DigitizationGrid grid = checked_digitization_grid(shape, h);
+    const VoxelGrid whole = grid.voxel_grid();
+    if (box.empty() || !VoxelBox{{0, 0, 0}, whole.dims}.contains(box))
+        throw Error("digitize: the box of voxels is empty or not inside the " + std::to_string(whole.dims[0]) + " x " +
+                    std::to_string(whole.dims[1]) + " x " + std::to_string(whole.dims[2]) + " grid");
+    grid.restrict_to(box);
+    return digitize_grid(grid);
 }
 
 Eigen::Vector3d true_normal(const ImplicitShape& shape, const Eigen::Vector3d& p) {

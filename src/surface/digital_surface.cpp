@@ -369,6 +369,12 @@ std::int64_t reglue_pinched_linels(DigitalSurface& surface, const std::vector<st
     return reglued;
 }
 
+}  // namespace
+
+std::array<std::int64_t, 3> surfel_corner_pointel(const Surfel& s, int corner) {
+    return corner_pointels(s)[std::size_t(corner)];
+}
+
 /// Connected components of the complex: faces glued in any label's surface.
 void label_components(DigitalSurface& surface) {
     const std::int64_t m = surface.face_count();
@@ -376,7 +382,7 @@ void label_components(DigitalSurface& surface) {
     for (std::int64_t f = 0; f < m; ++f)
         for (int e = 0; e < 4; ++e) {
             faces.unite(std::uint32_t(f), std::uint32_t(surface.adjacent_face(f, e)));
-            if (surface.adjacent_face_outer(f, e) >= 0)
+            if (surface.adjacent_face_outer.rows() == m && surface.adjacent_face_outer(f, e) >= 0)
                 faces.unite(std::uint32_t(f), std::uint32_t(surface.adjacent_face_outer(f, e)));
         }
     surface.face_component.assign(static_cast<std::size_t>(m), -1);
@@ -403,6 +409,8 @@ std::int64_t count_split_pointels(const DigitalSurface& surface) {
         if (keys[i] == keys[i - 1] && (i == 1 || keys[i - 1] != keys[i - 2])) ++split;
     return split;
 }
+
+namespace {
 
 void check_grid(const VoxelGrid& g, std::size_t voxel_values) {
     if (g.dims[0] <= 0 || g.dims[1] <= 0 || g.dims[2] <= 0 || static_cast<std::int64_t>(voxel_values) != g.voxel_count())

@@ -59,7 +59,7 @@ void read_image_payload(const std::string& path, ItkFormat format, const Payload
     info.value_type = layout.value_type;
     info.world_geometry = true;
     const VoxelGrid geometry = image_geometry(path, itk, info);
-    destination.allocate(path, dims);
+    if (!destination.allocate(path, dims)) return;
     destination.set_geometry(geometry);
     destination.info() = info;
     SampleWriter sink = destination.writer(data.path(), layout.sample);

@@ -50,7 +50,7 @@ Index3 prepare_destination(const std::string& path, const ImageHeader& header, c
     info.value_type = header.value_type;
     info.world_geometry = header.format != itk_format_name(ItkFormat::Tiff);  // TIFF has no origin nor direction
     const VoxelGrid geometry = image_geometry(path, header, info);
-    destination.allocate(path, dims);
+    destination.allocate(path, dims);  // never header-only: read_volume_dims reads .vol, .longvol, .pgm3d, .raw only
     destination.set_geometry(geometry);
     destination.info() = info;
     return dims;

@@ -491,7 +491,7 @@ void read_nifti_voxels(const std::string& path, const VolumeLimits& limits, Voxe
     info.value_type = parsed.value_type;
     info.world_geometry = true;
     const VoxelGrid geometry = nifti_grid(header_path, parsed, info);
-    destination.allocate(path, parsed.dims);
+    if (!destination.allocate(path, parsed.dims)) return;
     destination.set_geometry(geometry);
     destination.info() = info;
 

@@ -184,7 +184,7 @@ void read_npy_voxels(const std::string& path, const VolumeLimits& limits, VoxelD
     const std::uint64_t bytes = payload_bytes(path, voxels, npy.sample.bytes);
     require_exact_payload(file, bytes, "header says " + describe_payload(dims, voxels, npy.sample.bytes));
 
-    destination.allocate(path, dims);
+    if (!destination.allocate(path, dims)) return;
     destination.info().format = header.format;
     destination.info().value_type = npy.value_type;
     // Fortran order, or at most one axis longer than 1 in the way: the file order is the grid's.

@@ -134,7 +134,7 @@ void decode_binary_values(InputFile& file, const Pgm3dHeader& header, std::int64
     const SampleFormat sample{header.maxval < 256 ? 1 : 2, SampleKind::Unsigned, true};
     const std::uint64_t expected = payload_bytes(path, voxels, sample.bytes);
     require_exact_payload(file, expected, "header says " + describe_payload(header.dims, voxels, sample.bytes));
-    destination.allocate(path, header.dims);
+    if (!destination.allocate(path, header.dims)) return;
     SampleWriter sink = destination.writer(path, sample);
     sink.reject_values_above(header.maxval, "maxval");
     decode_stored_payload(file, sink);
@@ -174,7 +174,7 @@ void read_pgm3d_voxels(const std::string& path, const VolumeLimits& limits, Voxe
 
     const std::string description = "header says " + describe_payload(header.dims, voxels, 1);
     require_plausible_ascii_payload(file, voxels, description);
-    destination.allocate(path, header.dims);
+    if (!destination.allocate(path, header.dims)) return;
     decode_ascii_values(file, header, description, destination);
 }
 

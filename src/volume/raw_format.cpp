@@ -68,7 +68,7 @@ void read_raw_voxels(const std::string& path, const RawVolumeLayout& layout, con
     if (layout.header_bytes > 0) description += " after " + std::to_string(layout.header_bytes) + " header bytes";
     require_exact_payload(file, expected, description);
 
-    destination.allocate(path, layout.dims);
+    if (!destination.allocate(path, layout.dims)) return;
     SampleWriter sink = destination.writer(path, sample);
     decode_stored_payload(file, sink);
 }

@@ -107,7 +107,7 @@ void decode_dgtal_payload(InputFile& file, const DgtalHeader& header, SampleForm
     else
         require_plausible_zlib_payload(file, expected, description);
 
-    destination.allocate(file.path(), header.dims);
+    if (!destination.allocate(file.path(), header.dims)) return;
     SampleWriter sink = destination.writer(file.path(), sample);
     if (header.version == 2)
         decode_stored_payload(file, sink);

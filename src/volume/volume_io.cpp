@@ -137,9 +137,30 @@ void VoxelDestination::set_geometry(const VoxelGrid& geometry) {
     grid_.direction = geometry.direction;
 }
 
-void VoxelDestination::allocate(const std::string& path, const Index3& dims) {
+VoxelDestination VoxelDestination::header_only() {
+    VoxelDestination destination(Kind::Mask, ValueRange{});
+    destination.header_only_ = true;
+    return destination;
+}
+
+void VoxelDestination::restrict_to(const VoxelBox& box) {
+    has_region_ = true;
+    region_.box = box;
+}
+
+bool VoxelDestination::allocate(const std::string& path, const Index3& dims) {
+    dims_ = dims;
     grid_ = VoxelGrid{};
     grid_.dims = dims;
+    if (header_only_) return false;
+    if (has_region_) {
+        if (kind_ == Kind::Labels) fail(path, "label maps are read whole (no box reads of label maps yet)");
+        region_.dims = dims;
+        if (region_.box.empty() || !VoxelBox{{0, 0, 0}, dims}.contains(region_.box))
+            fail(path, "the box of voxels " + format_dims(region_.box.lo) + " to " + format_dims(region_.box.hi) +
+                           " (excluded) is not inside the " + format_dims(dims) + " grid");
+        grid_.dims = region_.box.size();
+    }
     const auto count = static_cast<std::size_t>(grid_.voxel_count());
     const int bytes_per_voxel = kind_ == Kind::Mask ? 1 : 4;
     try {
@@ -151,31 +172,34 @@ void VoxelDestination::allocate(const std::string& path, const Index3& dims) {
             mask_.assign(count, 0);
     } catch (const std::bad_alloc&) {
         const char* what = kind_ == Kind::Values ? " volume of values (" : kind_ == Kind::Labels ? " label map (" : " mask (";
-        fail(path, "not enough memory for a " + format_dims(dims) + what +
+        fail(path, "not enough memory for a " + format_dims(grid_.dims) + what +
                        std::to_string(grid_.voxel_count() * bytes_per_voxel) + " bytes)");
     }
     if (kind_ == Kind::Labels && label_table_ == nullptr) label_table_ = std::make_shared<LabelTable>(path, max_labels_);
+    return true;
 }
 
 void VoxelDestination::store_x_plane(std::int64_t i, const VoxelDestination& plane) {
-    const std::int64_t nx = grid_.dims[0], ny = grid_.dims[1], nz = grid_.dims[2];
+    const std::int64_t nx = dims_[0], ny = dims_[1], nz = dims_[2];
     for (std::int64_t k = 0; k < nz; ++k)
         for (std::int64_t j = 0; j < ny; ++j) {
             const auto source = static_cast<std::size_t>(k + nz * j);
-            const auto target = static_cast<std::size_t>(i + nx * (j + ny * k));
+            std::int64_t target = i + nx * (j + ny * k);
+            if (has_region_ && (target = region_.local_index(std::uint64_t(target))) < 0) continue;
             if (kind_ == Kind::Values)
-                values_[target] = plane.values_[source];
+                values_[std::size_t(target)] = plane.values_[source];
             else if (kind_ == Kind::Mask)
-                mask_[target] = plane.mask_[source];
+                mask_[std::size_t(target)] = plane.mask_[source];
             else if (kind_ == Kind::Labels)
-                labels_[target] = plane.labels_[source];
+                labels_[std::size_t(target)] = plane.labels_[source];
         }
 }
 
 SampleWriter VoxelDestination::writer(const std::string& path, SampleFormat format) {
+    const StreamRegion* region = has_region_ ? &region_ : nullptr;
     switch (kind_) {
-    case Kind::Values: return SampleWriter(path, format, values_);
-    case Kind::Mask: return SampleWriter(path, format, range_, mask_);
+    case Kind::Values: return SampleWriter(path, format, values_, region);
+    case Kind::Mask: return SampleWriter(path, format, range_, mask_, region);
     case Kind::Labels: return SampleWriter(path, format, labels_, *label_table_);
     case Kind::Statistics: break;
     }
@@ -308,8 +332,21 @@ void InputFile::skip(std::uint64_t count) {
 // ----------------------------------------------------------------------------------------------
 // SampleWriter
 
-SampleWriter::SampleWriter(const std::string& path, SampleFormat format, std::uint64_t size)
+std::int64_t StreamRegion::local_index(std::uint64_t index) const {
+    const auto linear = static_cast<std::int64_t>(index);
+    const std::int64_t i = linear % dims[0], j = (linear / dims[0]) % dims[1], k = linear / (dims[0] * dims[1]);
+    if (!box.contains(i, j, k)) return -1;
+    const Index3 size = box.size();
+    return (i - box.lo[0]) + size[0] * ((j - box.lo[1]) + size[1] * (k - box.lo[2]));
+}
+
+SampleWriter::SampleWriter(const std::string& path, SampleFormat format, std::uint64_t size, const StreamRegion* region)
     : path_(path), format_(format), size_(size) {
+    if (region != nullptr) {
+        has_region_ = true;
+        region_ = *region;
+        size_ = static_cast<std::uint64_t>(region->dims[0] * region->dims[1] * region->dims[2]);
+    }
     use_byte_table_ = format_.bytes == 1;
 }
 
@@ -323,15 +360,16 @@ void SampleWriter::build_byte_tables() {
     }
 }
 
-SampleWriter::SampleWriter(const std::string& path, SampleFormat format, const ValueRange& range, std::vector<std::uint8_t>& mask)
-    : SampleWriter(path, format, mask.size()) {
+SampleWriter::SampleWriter(const std::string& path, SampleFormat format, const ValueRange& range, std::vector<std::uint8_t>& mask,
+                           const StreamRegion* region)
+    : SampleWriter(path, format, mask.size(), region) {
     range_ = range;
     mask_ = mask.data();
     build_byte_tables();
 }
 
-SampleWriter::SampleWriter(const std::string& path, SampleFormat format, std::vector<float>& values)
-    : SampleWriter(path, format, values.size()) {
+SampleWriter::SampleWriter(const std::string& path, SampleFormat format, std::vector<float>& values, const StreamRegion* region)
+    : SampleWriter(path, format, values.size(), region) {
     values_ = values.data();
     build_byte_tables();
 }
@@ -347,6 +385,11 @@ void SampleWriter::rescale(double slope, double intercept) {
     slope_ = slope;
     intercept_ = intercept;
     build_byte_tables();
+}
+
+void SampleWriter::skip_to(std::uint64_t index) {
+    if (index < written_ || index > size_ || pending_size_ != 0) fail(path_, "internal error: payload read out of order");
+    written_ = index;
 }
 
 SampleWriter::SampleWriter(const std::string& path, SampleFormat format, std::vector<std::uint32_t>& labels,
@@ -365,8 +408,14 @@ void SampleWriter::reject_values_above(double max_value, const std::string& limi
 
 void SampleWriter::emit(const std::uint8_t* sample) {
     if (written_ >= size_) fail(path_, "payload holds more values than the " + std::to_string(size_) + " voxels announced");
+    std::int64_t slot = static_cast<std::int64_t>(written_);
+    if (has_region_ && (slot = region_.local_index(written_)) < 0) {
+        ++written_;  // outside the box (values there are not checked)
+        return;
+    }
     if (use_byte_table_ && mask_ != nullptr && !has_max_) {  // the common case of .vol files: one lookup
-        mask_[written_++] = mask_table_[*sample];
+        mask_[slot] = mask_table_[*sample];
+        ++written_;
         return;
     }
     double value = use_byte_table_ ? byte_table_[*sample] : decode_sample(sample, format_);
@@ -374,16 +423,15 @@ void SampleWriter::emit(const std::uint8_t* sample) {
     if (has_max_ && value > max_value_)
         fail(path_, "value " + format_value(value) + " of voxel #" + std::to_string(written_) + " exceeds " + max_name_ + " " +
                         format_value(max_value_));
-    if (mask_ != nullptr) {
-        mask_[written_++] = range_.contains(value) ? 1 : 0;
-    } else if (labels_ != nullptr) {
-        labels_[written_] = label_table_->index_of(value, written_);
-        ++written_;
-    } else if (values_ != nullptr) {
-        values_[written_++] = static_cast<float>(value);
-    } else {
-        histogram_->add(value), ++written_;
-    }
+    if (mask_ != nullptr)
+        mask_[slot] = range_.contains(value) ? 1 : 0;
+    else if (labels_ != nullptr)
+        labels_[slot] = label_table_->index_of(value, written_);
+    else if (values_ != nullptr)
+        values_[slot] = static_cast<float>(value);
+    else
+        histogram_->add(value);
+    ++written_;
 }
 
 void SampleWriter::consume(const std::uint8_t* data, std::size_t count) {
@@ -453,20 +501,20 @@ void decode_values(const std::uint8_t* data, std::size_t count, bool swap, doubl
 }  // namespace
 
 template <typename T>
-void SampleWriter::decode_typed(const std::uint8_t* data, std::size_t count) {
+void SampleWriter::decode_typed(const std::uint8_t* data, std::size_t count, std::uint64_t slot) {
     const bool swap = format_.big_endian != host_big_endian();
     if (mask_ != nullptr) {
-        std::uint8_t* out = mask_ + written_;
+        std::uint8_t* out = mask_ + slot;
         const ValueRange range = range_;
         decode_values<T>(data, count, swap, slope_, intercept_, rescaled_,
                          [&](std::size_t i, double v) { out[i] = range.contains(v) ? 1 : 0; });
     } else if (values_ != nullptr) {
-        float* out = values_ + written_;
+        float* out = values_ + slot;
         decode_values<T>(data, count, swap, slope_, intercept_, rescaled_,
                          [&](std::size_t i, double v) { out[i] = static_cast<float>(v); });
     } else if (labels_ != nullptr) {
-        std::uint32_t* out = labels_ + written_;
-        const std::uint64_t first = written_;
+        std::uint32_t* out = labels_ + slot;
+        const std::uint64_t first = slot;  // whole grids only: the slot is the voxel number
         decode_values<T>(data, count, swap, slope_, intercept_, rescaled_,
                          [&](std::size_t i, double v) { out[i] = label_table_->index_of(v, first + i); });
     } else {
@@ -475,34 +523,57 @@ void SampleWriter::decode_typed(const std::uint8_t* data, std::size_t count) {
 }
 
 void SampleWriter::decode_run(const std::uint8_t* data, std::size_t count) {
+    if (!has_region_) {
+        decode_span(data, count, written_);
+        written_ += count;
+        return;
+    }
+    // A box of the grid: the stream voxels of one x-row that lie in the box go to consecutive slots.
+    const auto width = static_cast<std::size_t>(format_.bytes);
+    const Index3& d = region_.dims;
+    const VoxelBox& box = region_.box;
+    while (count > 0) {
+        const auto linear = static_cast<std::int64_t>(written_);
+        const std::int64_t i = linear % d[0], j = (linear / d[0]) % d[1], k = linear / (d[0] * d[1]);
+        const std::size_t row = std::min(count, static_cast<std::size_t>(d[0] - i));
+        const std::int64_t lo = std::max(i, box.lo[0]), hi = std::min(i + std::int64_t(row), box.hi[0]);
+        if (lo < hi && box.contains(lo, j, k))
+            decode_span(data + std::size_t(lo - i) * width, std::size_t(hi - lo),
+                        static_cast<std::uint64_t>(region_.local_index(std::uint64_t(linear + lo - i))));
+        data += row * width;
+        count -= row;
+        written_ += row;
+    }
+}
+
+void SampleWriter::decode_span(const std::uint8_t* data, std::size_t count, std::uint64_t slot) {
     if (use_byte_table_) {  // 1-byte values: one table look-up each (the table holds the rescaled values)
         if (mask_ != nullptr)
-            for (std::size_t i = 0; i < count; ++i) mask_[written_ + i] = mask_table_[data[i]];
+            for (std::size_t i = 0; i < count; ++i) mask_[slot + i] = mask_table_[data[i]];
         else if (values_ != nullptr)
-            for (std::size_t i = 0; i < count; ++i) values_[written_ + i] = static_cast<float>(byte_table_[data[i]]);
+            for (std::size_t i = 0; i < count; ++i) values_[slot + i] = static_cast<float>(byte_table_[data[i]]);
         else if (labels_ != nullptr)
-            for (std::size_t i = 0; i < count; ++i) labels_[written_ + i] = label_table_->index_of(byte_table_[data[i]], written_ + i);
+            for (std::size_t i = 0; i < count; ++i) labels_[slot + i] = label_table_->index_of(byte_table_[data[i]], slot + i);
         else
             for (std::size_t i = 0; i < count; ++i) histogram_->add(byte_table_[data[i]]);
     } else {
         switch (format_.kind) {
         case SampleKind::Unsigned:
-            if (format_.bytes == 2) decode_typed<std::uint16_t>(data, count);
-            else if (format_.bytes == 4) decode_typed<std::uint32_t>(data, count);
-            else decode_typed<std::uint64_t>(data, count);
+            if (format_.bytes == 2) decode_typed<std::uint16_t>(data, count, slot);
+            else if (format_.bytes == 4) decode_typed<std::uint32_t>(data, count, slot);
+            else decode_typed<std::uint64_t>(data, count, slot);
             break;
         case SampleKind::Signed:
-            if (format_.bytes == 2) decode_typed<std::int16_t>(data, count);
-            else if (format_.bytes == 4) decode_typed<std::int32_t>(data, count);
-            else decode_typed<std::int64_t>(data, count);
+            if (format_.bytes == 2) decode_typed<std::int16_t>(data, count, slot);
+            else if (format_.bytes == 4) decode_typed<std::int32_t>(data, count, slot);
+            else decode_typed<std::int64_t>(data, count, slot);
             break;
         case SampleKind::Float:
-            if (format_.bytes == 4) decode_typed<float>(data, count);
-            else decode_typed<double>(data, count);
+            if (format_.bytes == 4) decode_typed<float>(data, count, slot);
+            else decode_typed<double>(data, count, slot);
             break;
         }
     }
-    written_ += count;
 }
 
 // ----------------------------------------------------------------------------------------------
@@ -628,6 +699,37 @@ BinaryVolume read_volume(const std::string& path, const ValueRange& range, const
     auto destination = volume_io_detail::VoxelDestination::mask(range);
     volume_io_detail::read_volume_voxels(path, raw_layout, limits, destination);
     if (info != nullptr) *info = destination.info();
+    return destination.take_mask();
+}
+
+namespace {
+
+/// Box reads and header probes exist for the formats whose readers honour a region and a
+/// header-only destination; the others would read (or allocate) the whole volume.
+void require_block_format(const std::string& path) {
+    using volume_io_detail::VolumeFormat;
+    const VolumeFormat format = volume_io_detail::volume_format(path);
+    if (format != VolumeFormat::Vol && format != VolumeFormat::Longvol && format != VolumeFormat::Pgm3d &&
+        format != VolumeFormat::Raw)
+        volume_io_detail::fail(path, "block-wise runs (--block-size, dsreg-mpi) read .vol, .longvol, .pgm3d and .raw "
+                                     "files only; convert this file to .raw (or run dsreg regularize without --block-size)");
+}
+
+}  // namespace
+
+Index3 read_volume_dims(const std::string& path, const RawVolumeLayout* raw_layout, const VolumeLimits& limits) {
+    require_block_format(path);
+    auto destination = volume_io_detail::VoxelDestination::header_only();
+    volume_io_detail::read_volume_voxels(path, raw_layout, limits, destination);
+    return destination.dims();
+}
+
+BinaryVolume read_volume_box(const std::string& path, const VoxelBox& box, const ValueRange& range,
+                             const RawVolumeLayout* raw_layout, const VolumeLimits& limits) {
+    require_block_format(path);
+    auto destination = volume_io_detail::VoxelDestination::mask(range);
+    destination.restrict_to(box);
+    volume_io_detail::read_volume_voxels(path, raw_layout, limits, destination);
     return destination.take_mask();
 }
 

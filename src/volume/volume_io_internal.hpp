@@ -76,6 +76,17 @@ private:
 };
 
 
+/// Where a stream of voxels goes when only a box of the grid is kept: voxel (i,j,k) of the stream
+/// (x fastest over `dims`) is stored at the box's own linear index if it lies in `box`, and
+/// dropped otherwise.
+struct StreamRegion {
+    Index3 dims{0, 0, 0};
+    VoxelBox box;
+
+    /// Index in the box's storage of stream voxel `index`, or −1 outside the box.
+    std::int64_t local_index(std::uint64_t index) const;
+};
+
 /// Label indices of the integer values of a label map, assigned as the values are decoded
 /// (index 0 is the value 0, the background), then renumbered in increasing order of value.
 /// The number of distinct labels is capped (VolumeLimits::max_labels) so that a hostile file of
@@ -107,14 +118,17 @@ private:
 /// Decodes a stream of encoded samples, in voxel order, into either mask bytes (1 = value in
 /// `range`), float values, or label indices. Bytes may arrive in chunks of any size: a sample split between
 /// chunks is completed by the next call. Optionally rejects values above a maximum (PGM's
-/// maxval). The destination vector must already have one element per voxel.
+/// maxval). The destination vector must already have one element per voxel (per voxel of the
+/// box, with a region).
 class SampleWriter {
 public:
     /// Thresholding: mask[i] = range.contains(value of voxel i).
-    SampleWriter(const std::string& path, SampleFormat format, const ValueRange& range, std::vector<std::uint8_t>& mask);
+    SampleWriter(const std::string& path, SampleFormat format, const ValueRange& range, std::vector<std::uint8_t>& mask,
+                 const StreamRegion* region = nullptr);
     /// Values: values[i] = value of voxel i, rounded to float.
-    SampleWriter(const std::string& path, SampleFormat format, std::vector<float>& values);
-    /// Labels: labels[i] = table.index_of(value of voxel i).
+    SampleWriter(const std::string& path, SampleFormat format, std::vector<float>& values,
+                 const StreamRegion* region = nullptr);
+    /// Labels: labels[i] = table.index_of(value of voxel i) (whole grids only).
     SampleWriter(const std::string& path, SampleFormat format, std::vector<std::uint32_t>& labels, LabelTable& table);
     /// Statistics: each of the `size` values is added to `histogram`, nothing is stored.
     SampleWriter(const std::string& path, SampleFormat format, ValueHistogram& histogram, std::uint64_t size);
@@ -127,6 +141,12 @@ public:
 
     void consume(const std::uint8_t* data, std::size_t count);
 
+    /// With a region: the next sample consumed is that of stream voxel `index` (≥ the current
+    /// one); the voxels skipped are outside the box. For payloads read by offsets.
+    void skip_to(std::uint64_t index);
+    const StreamRegion* region() const { return has_region_ ? &region_ : nullptr; }
+    int sample_bytes() const { return format_.bytes; }
+
     std::uint64_t samples_written() const { return written_; }
     /// Bytes still to come before every voxel has its value.
     std::uint64_t bytes_missing() const {
@@ -135,13 +155,16 @@ public:
     bool complete() const { return written_ == size_ && pending_size_ == 0; }
 
 private:
-    SampleWriter(const std::string& path, SampleFormat format, std::uint64_t size);
+    SampleWriter(const std::string& path, SampleFormat format, std::uint64_t size, const StreamRegion* region = nullptr);
     void build_byte_tables();
     void emit(const std::uint8_t* sample);  ///< one value, with every check (PGM's maxval)
-    /// `count` whole values, after the caller checked they fit: the fast path.
+    /// `count` whole values, after the caller checked they fit: the fast path (with a region, the
+    /// stretches of x-rows inside its box).
     void decode_run(const std::uint8_t* data, std::size_t count);
+    /// `count` whole values stored from slot `slot` of the destination on.
+    void decode_span(const std::uint8_t* data, std::size_t count, std::uint64_t slot);
     template <typename T>
-    void decode_typed(const std::uint8_t* data, std::size_t count);
+    void decode_typed(const std::uint8_t* data, std::size_t count, std::uint64_t slot);
 
     std::string path_;
     SampleFormat format_;
@@ -151,7 +174,9 @@ private:
     std::uint32_t* labels_ = nullptr;
     LabelTable* label_table_ = nullptr;
     ValueHistogram* histogram_ = nullptr;
-    std::uint64_t size_ = 0;
+    std::uint64_t size_ = 0;        ///< voxels of the stream
+    bool has_region_ = false;
+    StreamRegion region_;
     bool use_byte_table_ = false;
     double byte_table_[256] = {};        ///< decoded value of each byte, for 1-byte samples
     std::uint8_t mask_table_[256] = {};  ///< its mask value (thresholding, 1-byte samples)
@@ -169,9 +194,10 @@ private:
 using MaskWriter = SampleWriter;
 
 /// What a reader produces: a mask thresholded by a ValueRange (read_volume), the values
-/// themselves as floats (read_volume_values) or label indices (read_label_volume). Readers call
-/// allocate() once the header is checked, then feed it through writer() (binary payloads) or
-/// set() (ASCII payloads).
+/// themselves as floats (read_volume_values) or label indices (read_label_volume), of the whole
+/// grid or (mask and values) of a box of it, or only the dimensions (header_only). Readers call
+/// allocate() once the header is checked and, if it returns true, feed the payload through
+/// writer() (binary payloads) or set() (ASCII payloads).
 class VoxelDestination {
 public:
     static VoxelDestination mask(const ValueRange& range);
@@ -179,21 +205,33 @@ public:
     static VoxelDestination labels(std::int64_t max_labels);
     /// Nothing stored per voxel: every value goes to `histogram` (read_value_histogram).
     static VoxelDestination statistics(ValueHistogram& histogram);
+    /// Records the dimensions; allocate() returns false, so that no payload is read.
+    static VoxelDestination header_only();
 
-    /// Storage for `dims` voxels (spacing 1, origin 0, identity direction). Throws dsreg::Error
-    /// naming `path` if the memory cannot be allocated.
-    void allocate(const std::string& path, const Index3& dims);
+    /// Keeps only the voxels of `box` (call before allocate(), which checks that the box lies
+    /// in the grid). Only the readers of .vol, .longvol, .pgm3d and .raw honour it
+    /// (read_volume_box refuses the other formats).
+    void restrict_to(const VoxelBox& box);
+
+    /// Storage for `dims` voxels (spacing 1, origin 0, identity direction), or for the box.
+    /// Throws dsreg::Error naming `path` if the memory cannot be allocated or the box is not
+    /// inside the grid. Returns whether the payload is wanted (false for header_only).
+    bool allocate(const std::string& path, const Index3& dims);
     /// The grid's spacing, origin and direction (dims stay those of allocate()).
     void set_geometry(const VoxelGrid& geometry);
     /// Format, value type and notes, for read_volume's optional output.
     VolumeFileInfo& info() { return info_; }
-    std::uint64_t size() const { return static_cast<std::uint64_t>(grid_.voxel_count()); }
-    /// Stores the value of voxel `index` (thresholded or rounded to float).
+    /// Voxels of the stream (the whole grid).
+    std::uint64_t size() const { return static_cast<std::uint64_t>(dims_[0] * dims_[1] * dims_[2]); }
+    const Index3& dims() const { return dims_; }
+    /// Stores the value of voxel `index` of the grid (thresholded or rounded to float), if kept.
     void set(std::uint64_t index, double value) {
+        std::int64_t slot = static_cast<std::int64_t>(index);
+        if (has_region_ && (slot = region_.local_index(index)) < 0) return;
         switch (kind_) {
-        case Kind::Values: values_[index] = static_cast<float>(value); break;
-        case Kind::Mask: mask_[index] = range_.contains(value) ? 1 : 0; break;
-        case Kind::Labels: labels_[index] = label_table_->index_of(value, index); break;
+        case Kind::Values: values_[std::size_t(slot)] = static_cast<float>(value); break;
+        case Kind::Mask: mask_[std::size_t(slot)] = range_.contains(value) ? 1 : 0; break;
+        case Kind::Labels: labels_[std::size_t(slot)] = label_table_->index_of(value, index); break;
         case Kind::Statistics: histogram_->add(value); break;
         }
     }
@@ -223,10 +261,14 @@ private:
         : kind_(kind), range_(range), histogram_(histogram), max_labels_(max_labels) {}
 
     Kind kind_;
+    bool header_only_ = false;
     ValueRange range_;
     ValueHistogram* histogram_;
     std::int64_t max_labels_;
-    VoxelGrid grid_;
+    Index3 dims_{0, 0, 0};  ///< of the whole grid
+    bool has_region_ = false;
+    StreamRegion region_;
+    VoxelGrid grid_;        ///< of what is kept
     VolumeFileInfo info_;
     std::vector<std::uint8_t> mask_;
     std::vector<float> values_;
@@ -273,7 +315,8 @@ void require_exact_payload(const InputFile& file, std::uint64_t expected_bytes, 
 /// maximum compression ratio (1032:1): a lying header must not make us allocate.
 void require_plausible_zlib_payload(const InputFile& file, std::uint64_t expected_bytes, const std::string& description);
 
-/// Feeds the rest of the file (exactly the expected size, already checked) to `sink`.
+/// Feeds the rest of the file (exactly the expected size, already checked) to `sink`; with a
+/// region, only the rows of its box, each read at its offset.
 void decode_stored_payload(InputFile& file, SampleWriter& sink);
 /// Feeds the next bytes of the file to `sink` until it is complete; what follows is not read.
 void decode_stored_prefix(InputFile& file, SampleWriter& sink);

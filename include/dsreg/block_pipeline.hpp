@@ -1,0 +1,120 @@
+// dsreg — the pipeline block by block (docs/scaling.md): what one block of the volume contributes
+// (its patch of the digital surface, the normal field there, its exact rows of R, eq. 22–23), the
+// block-wise streaming run of `dsreg regularize --block-size`, and the welded mesh as a
+// PipelineResult, shared with the MPI driver (distributed.hpp).
+//
+// Streaming. The grid is cut into blocks of --block-size voxels, read one at a time. A first
+// pass minimizes, for each block, the energy of eq. (1) restricted to the surface within its box
+// grown by a halo of H voxels (a free boundary) and keeps the vertices the block owns. The error
+// this leaves decays away from the halo's edge over about ℓ = sqrt(β/α) edges (the alignment
+// term spreads a displacement along the normals, the data term pulls it back), so the halo is
+// chosen from α and β (default_block_halo). --schwarz-sweeps then repeats the pass as an
+// overlapping (multiplicative) Schwarz method on R x = b: each block solves for the vertices of
+// its grown box with the others held at their current values, which converges to the
+// whole-volume solution (by a factor of about exp(−H/ℓ) per sweep).
+//
+// The error bound. With r = R x̃ − b at the welded vertices x̃, ‖x̃ − x*‖²_R = rᵀR⁻¹r ≤ rᵀM⁻¹r for
+// any M ≤ R; M = R without the terms of eq. (1) that straddle the cuts of a second, staggered set
+// of blocks is block-diagonal, so rᵀM⁻¹r is a sum of one small solve per block. The staggered
+// blocks are centred on the first ones' seams, where r lives (inside a block x̃ solves the
+// block's equations). Then ‖x̃ − x*‖₂ ≤ ‖x̃ − x*‖_R / sqrt(α min w0) (solvers.hpp): a provable
+// bound on the distance of every vertex to the whole-volume solution (a 2-norm over all of them,
+// so pessimistic for the largest one, docs/scaling.md); it costs one more pass without halos.
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "dsreg/blocks.hpp"
+#include "dsreg/pipeline.hpp"
+
+namespace dsreg {
+
+/// What every block of a run shares.
+struct BlockPlan {
+    LoadedVolume header;      ///< the volume without its voxels (probe_volume)
+    PipelineOptions options;  ///< checked, with the normal field's radius filled in
+    NormalFieldReach reach;
+    Index3 read_margin{0, 0, 0};      ///< voxels read around a block's rows box, per axis
+    std::int64_t surface_margin = 0;  ///< extra faces of the patch for fields that read the surface
+};
+
+/// Checks the options of a block-wise run, refusing those that need the whole surface at once
+/// (--normals at, --normals-file, --clamp, local weight maps and files) and --max-memory (its
+/// estimate is the whole-volume run's) with a dsreg::Error
+/// naming the flag and `driver` (e.g. "--block-size" or "dsreg-mpi"), and the defaults measured on
+/// the whole object (--ii-max-radius, --alpha-reach, --shrink-correction: refused when given);
+/// probes the volume; fixes the radius of the normal field to the whole-volume one (the fixed-radius
+/// field, not the adaptive default) and turns the thin-part weights and the shrink correction off.
+/// So a block-wise run equals the whole-volume run of `options` of the plan, not of the defaults.
+BlockPlan plan_block_run(const VolumeSource& source, const PipelineOptions& options, const std::string& driver);
+
+/// What one block contributes. Its patch covers the vertices keyed in `rows` (⊇ owned).
+struct BlockStages {
+    VoxelBox owned, rows, read;        ///< boxes of the whole grid
+    std::int64_t owned_object_voxels = 0;
+    SurfacePatch patch;
+    NormalField field;              ///< on the patch faces; exact on those around its row vertices
+    RegularizationWeights weights;  ///< on the patch (metric filled in)
+    RegularizationSystem system;    ///< R and b of the patch: rows of row vertices are the whole surface's
+    double read_seconds = 0, surface_seconds = 0, normals_seconds = 0, assembly_seconds = 0;
+};
+
+/// Reads the block (block_read_box), extracts its patch, estimates the field and assembles R. A
+/// block without faces gives an empty patch.
+BlockStages run_block_stages(const VolumeSource& source, const BlockPlan& plan, const VoxelBox& owned, const VoxelBox& rows);
+
+/// The voxels a block reads for the rows box `rows`: rows + the patch margin + the field's reach.
+VoxelBox block_read_box(const BlockPlan& plan, const VoxelBox& rows);
+
+/// The default halo (voxels) of the streaming mode: 2·sqrt(β/α) edges (the decay length of a
+/// perturbation, twice), plus the patch margin; docs/scaling.md has the measurements.
+std::int64_t default_block_halo(const PipelineOptions& options);
+
+/// Solves for the row vertices of a patch with the others held: R_SS x_S = b_S − R_SO x_O, one
+/// overlapping Schwarz step. `x` (3 entries per patch vertex, interleaved) holds on entry the
+/// initial guess at the row vertices and the held values elsewhere, on exit the solution at the
+/// row vertices. The solver's error bound uses α·min over the row vertices of α_i w0_i.
+SolveReport solve_patch_rows(const BlockStages& block, Eigen::VectorXd& x, const SolverOptions& solver);
+
+/// The first pass of the streaming mode: minimizes the energy of the patch faces whose voxel lies
+/// in the rows box alone (a free boundary: as if the surface ended there) over their vertices,
+/// from the guess in `x` (3 entries per patch vertex); writes their solution into `x`.
+SolveReport solve_patch_free(const BlockStages& block, Eigen::VectorXd& x, const SolverOptions& solver);
+
+/// The block's share of the streaming error bound: an upper bound on rᵀ M_b⁻¹ r, where r holds
+/// the residual rows (R x̃ − b) of the block's owned vertices (3 entries per patch vertex, zero
+/// elsewhere) and M_b is R restricted to the terms of eq. (1) that involve owned vertices only:
+/// the data term of each owned vertex, the alignment of the faces whose corners are all owned,
+/// the fairness of the owned vertices whose faces are all such faces. M = Σ_b M_b ≤ R (only
+/// positive semi-definite terms are left out), so Σ_b rᵀ M_b⁻¹ r ≥ rᵀ R⁻¹ r = ‖x̃ − x*‖²_R.
+double owned_energy_norm_bound(const BlockStages& block, const Eigen::VectorXd& residual, const SolverOptions& solver);
+
+/// The parts of a welded run that the blocks computed.
+struct WeldedRun {
+    WeldedSurface welded;
+    NormalField field;  ///< description, radius, kernel (normals: taken from `welded`)
+    std::int64_t object_voxels = 0;
+    SolveReport solve;
+    double assembly_seconds = 0, solve_seconds = 0;
+    nlohmann::json blocks = nlohmann::json::object();  ///< the report's "blocks" object
+    std::vector<std::pair<std::string, double>> stage_seconds;
+};
+
+/// The welded run as run_pipeline returns it: weights (the metric on the whole surface),
+/// energies before and after, faces against the field, the report's extension fields.
+PipelineResult welded_pipeline_result(WeldedRun run, const BlockPlan& plan);
+
+/// The block-wise streaming run (see above; stages reported to `progress`). Throws dsreg::Error.
+PipelineResult run_streaming_pipeline(const VolumeSource& source, const PipelineOptions& options,
+                                      const ProgressCallback& progress = {});
+
+/// Writes one mesh per block of `layout` (its owned faces and their vertices, binary PLY with the
+/// field u per face and each vertex's global key as the vertex property "key") into `folder`
+/// (created if missing), and manifest.json listing the grid, each block's box, file and counts.
+void write_block_fragments(const std::string& folder, const PipelineResult& result, const BlockLayout& layout);
+
+}  // namespace dsreg
