@@ -62,6 +62,15 @@ check "streaming exits 0" test $? -eq 0
 check "streaming: same faces, same order" cmp -s <(faces "$work/whole.obj") <(faces "$work/streamed.obj")
 check "streaming reports its bound" grep -q '"error_bound_voxels"' "$work/streamed.json"
 check "streaming fragments" test -s "$work/streamed/manifest.json"
+# The validity stage on the welded mesh (docs/validity.md): leopold's thin arms fold as solved.
+repaired='import json,sys; v=json.load(open(sys.argv[1]))["validity"]; sys.exit(0 if v["repair"] and not v["before"]["valid"] and v["rounds"] > 0 and v["after"]["valid"] else 1)'
+"$DSREG" --shape leopold --h 0.5 -o "$work/leo-mpi.obj" --report "$work/leo-mpi.json" -q
+check "dsreg-mpi repairs the welded mesh" python3 -c "$repaired" "$work/leo-mpi.json"
+"$DSREG_SERIAL" regularize --shape leopold --h 0.5 --block-size 24 --block-halo 12 -o "$work/leo-blocks.obj" \
+    --report "$work/leo-blocks.json" -q
+check "streaming repairs the welded mesh" python3 -c "$repaired" "$work/leo-blocks.json"
+"$DSREG" --shape leopold --h 0.5 --no-check -o "$work/leo-raw.obj" --report "$work/leo-raw.json" -q
+check "dsreg-mpi --no-check: no validity" grep -q '"validity": null' "$work/leo-raw.json"
 DSREG=$DSREG_SERIAL
 expect_error "fragments need blocks" "--fragments" regularize --shape sphere9 --h 1 --fragments "$work/out.d" -o "$work/out.obj"
 expect_error "halo needs blocks" "--block-halo" regularize --shape sphere9 --h 1 --block-halo 4 -o "$work/out.obj"

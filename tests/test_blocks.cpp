@@ -12,6 +12,8 @@
 #include "dsreg/block_pipeline.hpp"
 #include "dsreg/blocks.hpp"
 #include "dsreg/error.hpp"
+#include "dsreg/evaluation.hpp"
+#include "dsreg/mesh_validity.hpp"
 #include "dsreg/normals.hpp"
 #include "dsreg/pipeline.hpp"
 #include "dsreg/volume_io.hpp"
@@ -335,6 +337,7 @@ TEST(Blocks, StreamingStaysWithinItsBoundAndWeldsAClosedSurface) {
     source.h = 0.7;
     PipelineOptions options;
     options.solver = SolverKind::Cholmod;
+    options.validity = ValidityMode::Off;  // the bound is the solve's (the repair's test is below)
     PipelineOptions blocks = options;
     options = plan_block_run(source, options, "--block-size").options;  // what blocks can do, whole
     const PipelineResult whole = run_pipeline(source, options);
@@ -358,6 +361,32 @@ TEST(Blocks, StreamingStaysWithinItsBoundAndWeldsAClosedSurface) {
         previous_error = error, previous_bound = bound;
         EXPECT_EQ(streamed.extension_report["blocks"]["halo_voxels"], 5);
     }
+}
+
+TEST(Blocks, StreamingRepairsTheWeldedMeshIntoAValidSolid) {
+    VolumeSource source;  // leopold's thin arms at h = 0.5 fold and cross as solved (docs/validity.md)
+    source.shape = "leopold";
+    source.h = 0.5;
+    PipelineOptions options;
+    options.blocks.block_size = {24, 24, 24};
+    options.blocks.halo = 12;
+    const PipelineResult streamed = run_pipeline(source, options);
+    ASSERT_TRUE(streamed.validity.has_value());
+    EXPECT_FALSE(streamed.validity->before.valid());
+    EXPECT_GT(streamed.validity->rounds, 0);
+    EXPECT_TRUE(streamed.validity->after.valid());
+    const MeshValidity written = check_mesh_validity(streamed.regularization.positions, streamed.surface.quads,
+                                                     streamed.field.normals);
+    EXPECT_TRUE(written.valid());
+    EXPECT_EQ(written.intersecting_pairs, 0);
+    EXPECT_EQ(streamed.stage_seconds.back().first, "validity");
+    EXPECT_EQ(streamed.faces_against_field,
+              count_faces_against_field(streamed.regularization.positions, streamed.surface.quads, streamed.field.normals));
+    options.validity = ValidityMode::Check;  // counted, not repaired: the mesh as solved
+    const PipelineResult checked = run_pipeline(source, options);
+    ASSERT_TRUE(checked.validity.has_value());
+    EXPECT_EQ(checked.validity->rounds, 0);
+    EXPECT_EQ(checked.validity->before.intersecting_pairs, streamed.validity->before.intersecting_pairs);
 }
 
 TEST(Blocks, OptionsThatNeedTheWholeSurfaceAreRefused) {

@@ -108,6 +108,12 @@ struct WeldedRun {
 /// energies before and after, faces against the field, the report's extension fields.
 PipelineResult welded_pipeline_result(WeldedRun run, const BlockPlan& plan);
 
+/// Stage "validity" on a welded mesh, exactly as run_pipeline runs it after a whole-volume solve
+/// (check, and repair unless options.validity is Check; nothing if Off: docs/validity.md), then
+/// the faces against the field counted again; the stage is appended to result.stage_seconds.
+/// Runs on one process: the welded mesh is whole there.
+void check_and_repair_welded(const PipelineOptions& options, PipelineResult& result, const ProgressCallback& progress);
+
 /// The block-wise streaming run (see above; stages reported to `progress`). Throws dsreg::Error.
 PipelineResult run_streaming_pipeline(const VolumeSource& source, const PipelineOptions& options,
                                       const ProgressCallback& progress = {});

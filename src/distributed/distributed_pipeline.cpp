@@ -233,6 +233,12 @@ PipelineResult run_distributed_pipeline(MPI_Comm comm, const VolumeSource& sourc
         result = welded_pipeline_result(std::move(run), plan);
     });
     finish_stage(report, "weld", weld_seconds, std::to_string(surfels) + " surfels on rank 0");
+    stage_seconds.emplace_back("weld", weld_seconds);
+    run_collectively(comm, [&] {  // the repair's local solves run on rank 0, which holds the welded mesh
+        if (rank != 0) return;
+        result.stage_seconds = stage_seconds;
+        check_and_repair_welded(plan.options, result, report);
+    });
 
     figures.peak_memory = peak_memory_bytes();
     const auto all = distributed::gather_arrays(comm, std::vector<RankFigures>{figures});
@@ -252,8 +258,6 @@ PipelineResult run_distributed_pipeline(MPI_Comm comm, const VolumeSource& sourc
                                          {"matrix_nonzeros", solution.matrix_nonzeros},
                                          {"largest_rank_peak_memory_bytes", largest_peak},
                                          {"per_rank", ranks}};
-    stage_seconds.emplace_back("weld", weld_seconds);
-    result.stage_seconds = stage_seconds;
     result.block_layout = layout;
     return result;
 }

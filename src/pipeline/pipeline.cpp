@@ -280,6 +280,15 @@ nlohmann::json space_json(const VoxelGrid& grid, const PipelineOutputs& outputs,
 
 }  // namespace
 
+void check_and_repair_welded(const PipelineOptions& options, PipelineResult& result, const ProgressCallback& progress) {
+    if (options.validity == ValidityMode::Off) return;
+    StageClock clock(progress);
+    check_and_repair(options, result, clock);
+    result.faces_against_field =
+        count_faces_against_field(result.regularization.positions, result.surface.quads, result.field.normals);
+    for (const auto& stage : clock.stage_seconds()) result.stage_seconds.push_back(stage);
+}
+
 double total_seconds(const PipelineResult& result) {
     return std::accumulate(result.stage_seconds.begin(), result.stage_seconds.end(), 0.0,
                            [](double sum, const auto& stage) { return sum + stage.second; });

@@ -267,6 +267,7 @@ PipelineResult run_streaming_pipeline(const VolumeSource& source, const Pipeline
                      format("%.2e", run.solve.error_bound / voxel) + " voxel");
     finish_stage(progress, "weld", weld_seconds, surfels + ", " + std::to_string(run.welded.surface.component_count) + " components");
     PipelineResult result = welded_pipeline_result(std::move(run), plan);
+    check_and_repair_welded(plan.options, result, progress);
     result.block_layout = layout;
     return result;
 }
