@@ -220,7 +220,7 @@ void add_convergence_command(CLI::App& app) {
     CLI::App* cmd = app.add_subcommand(
         "convergence", "Multigrid convergence experiment (paper Fig. 7): for each grid step h, digitize the shape, "
                        "regularize with alpha = A·h², and measure |u*-u|, |p-xi(p)|, |p*-xi(p*)| in L2 and Linf");
-    add_truth_shape_options(*cmd, options->truth);
+    add_truth_shape_options(*cmd, options->truth)->required();
     cmd->add_option("--h", options->h_range, "Grid steps MAX:MIN:COUNT, geometric (e.g. 0.2:0.006:12)")->required();
     cmd->add_option("--out", options->out_dir, "Output folder (created if missing): convergence.csv, convergence.svg")
         ->required();

@@ -7,12 +7,14 @@
 
 namespace dsreg::cli {
 
-/// Registers --shape (required), --box, --plane-normal, --plane-offset on `command`.
-void add_truth_shape_options(CLI::App& command, TruthShapeOptions& options);
+/// Registers --shape, --box, --plane-normal, --plane-offset on `command`; returns --shape (for
+/// the commands that require it: eval takes --volume instead).
+CLI::Option* add_truth_shape_options(CLI::App& command, TruthShapeOptions& options);
 
-/// Registers the flags of the evaluation on `command`: the truth shape's, --h, --wall-margin,
-/// --volume-cells (not the mesh file, not --json). The one definition of these flags: `dsreg
-/// eval` and the Python module's dsreg.evaluate keywords both parse them.
+/// Registers the flags of the evaluation on `command`: the truth shape's, --volume, --min, --max,
+/// --voxel-coordinates, --face-errors, --h, --wall-margin, --volume-cells (not the mesh file, not
+/// --json). The one definition of these flags: `dsreg eval` and the Python module's
+/// dsreg.evaluate keywords both parse them.
 void add_evaluation_flags(CLI::App& command, EvaluationRequest& request);
 
 /// Registers the `eval` subcommand on `app`.

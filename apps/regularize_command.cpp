@@ -57,8 +57,12 @@ void add_normal_field_options(CLI::App& cmd, NormalFieldOptions& o, PipelineOutp
                        "piecewise-smooth regularization of --at-input or --normals-file: keeps sharp features)")
         ->check(CLI::IsMember({"ii", "trivial", "ctrivial", "exact", "at"}));
     cmd.add_option("--radius", o.radius,
-                   "Radius of ii and ctrivial, physical units (default: 3·h^(1/3) for --shape; for files 3 voxels, "
-                   "or 5 voxels for ii with the biweight kernel)");
+                   "A fixed radius for ii and ctrivial, physical units (default for ii: adaptive, see --ii-max-radius; "
+                   "for ctrivial and --ii-extrapolate: 3·h^(1/3) for --shape, 3 voxels for files)");
+    cmd.add_option("--ii-max-radius", o.max_radius,
+                   "Largest radius of the adaptive integral invariants (the default field), physical units: each "
+                   "surfel's radius follows the local reach of the object and of the background, from 2 voxels up to "
+                   "this; extrapolated from 6 voxels up (docs/accuracy.md). Default 14 voxels");
     cmd.add_option("--ii-kernel", o.ii_kernel,
                    "Weights of the integral-invariant ball: biweight (1 - d^2/r^2)^2, smooth, more accurate "
                    "(docs/accuracy.md), or ball (uniform, the paper's integral invariants)")
@@ -101,6 +105,14 @@ void add_regularization_extension_options(CLI::App& command, RegularizationExten
                        "Box half-width in voxels (0.5 = the cube of the 8 voxel centres around a vertex; below 0.5 every "
                        "voxel centre stays strictly on its side)")
         ->capture_default_str();
+    command.add_option("--alpha-reach", o.alpha_reach,
+                       "Thin parts: the data term of a vertex whose local reach rho (physical units) is below R is "
+                       "weighted (R/rho)^2, so that thin tubes and plates do not shrink (docs/accuracy.md); 0 = off. "
+                       "Default 12 voxels");
+    command.add_option("--shrink-correction", o.shrink_correction,
+                       "Steps of averaging of the drift of the regularized surface along u, which is then removed "
+                       "(the solve's result lies slightly inside the digital surface; docs/accuracy.md); 0 = off. "
+                       "Default 40, off with --clamp");
     command.add_option("--metric", o.metric, "Metrics W0, W2: identity (paper) or area (estimated face and dual vertex areas)")
         ->check(CLI::IsMember(metric_names()))
         ->capture_default_str();

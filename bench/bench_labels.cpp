@@ -32,6 +32,7 @@
 #include <string>
 #include <vector>
 
+#include "dsreg/adaptive_normals.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/label_evaluation.hpp"
 #include "dsreg/label_shapes.hpp"
@@ -75,11 +76,13 @@ PointMatrix regularize_with(const DigitalSurface& surface, const VertexLinks& li
     return unflatten_points(x);
 }
 
-/// dsreg once per label (its indicator as a binary volume, the same field and weights): the
+/// dsreg once per label (its indicator as a binary volume, the same default field, adaptive, and
+/// weights): the
 /// distances of each label's vertices to its true interfaces, those at junction pointels of the
 /// complex to the true junction curves, and how many interface vertices two neighbours share
 /// (positions equal bit for bit).
-Row separate_runs(const LabelShape& shape, const LabelVolume& labels, const DigitalSurface& complex, double radius, double h) {
+Row separate_runs(const LabelShape& shape, const LabelVolume& labels, const DigitalSurface& complex,
+                  const AdaptiveNormalOptions& field, double h) {
     std::map<std::array<std::int32_t, 3>, std::vector<std::int64_t>> junction_sets;
     const Junctions junctions = find_junctions(complex, complex_edges(complex));
     const auto sets = vertex_label_values(complex);
@@ -94,7 +97,8 @@ Row separate_runs(const LabelShape& shape, const LabelVolume& labels, const Digi
         indicator.mask.resize(labels.labels.size());
         for (std::size_t q = 0; q < labels.labels.size(); ++q) indicator.mask[q] = labels.labels[q] == label;
         const DigitalSurface s = extract_digital_surface(indicator, Connectivity::TwentySix);
-        const PointMatrix p = regularize_with(s, vertex_links(s.quads, s.vertex_count()), integral_invariant_normals(indicator, s, radius));
+        const PointMatrix p = regularize_with(s, vertex_links(s.quads, s.vertex_count()),
+                                              adaptive_integral_invariant_normals(indicator, s, field).normals);
         const std::int64_t value = labels.values[label];
         for (std::int64_t v = 0; v < s.vertex_count(); ++v) {
             const Eigen::Vector3d x = p.row(v).transpose();
@@ -134,11 +138,10 @@ int accuracy(const std::vector<double>& steps) {
             options.solver = SolverKind::Cholmod;
             const PipelineResult result = run_pipeline(loaded, options);
             const DigitalSurface& s = result.surface;
-            const double radius = *result.field.radius;
             std::vector<Row> rows;
             rows.push_back(errors_row("digital surface", shape, s, s.vertices, h));
             rows.push_back(errors_row("**joint (default)**", shape, s, result.regularization.positions, h));
-            const PointMatrix indicator_ii = integral_invariant_normals(*loaded.labels, s, radius);
+            const PointMatrix& indicator_ii = result.field.adaptive->normals;  // before the interface normals
             rows.push_back(errors_row("joint, II of the inner label everywhere", shape, s, regularize_with(s, fairness_links(s), indicator_ii), h));
             rows.push_back(errors_row("joint, quad links (no junction fairness)", shape, s,
                                       regularize_with(s, vertex_links(s.quads, s.vertex_count()), result.field.normals), h));
@@ -148,7 +151,7 @@ int accuracy(const std::vector<double>& steps) {
                 rows.push_back(errors_row("joint, quad links" + g, shape, s,
                                           regularize_with(s, vertex_links(s.quads, s.vertex_count()), result.field.normals, gamma), h));
             }
-            rows.push_back(separate_runs(shape, *loaded.labels, s, radius, h));
+            rows.push_back(separate_runs(shape, *loaded.labels, s, default_adaptive_options(options.normals, loaded), h));
             for (const Row& r : rows)
                 std::printf("| %s | %g (%g voxels) | %lld | %lld | %s | %.3f | %.3f | %.3f | %.3f | %.0f %% |\n", name.c_str(), h, 10 / h,
                             (long long)s.face_count(), (long long)result.junctions.vertex_count, r.method.c_str(), r.all_mean,

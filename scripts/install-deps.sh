@@ -4,6 +4,8 @@
 #                                    libgdcm-tools completes GDCM's CMake package, which ITK loads)
 #   scripts/install-deps.sh --dev    also the test and benchmark libraries, and nibabel, VTK and
 #                                    numpy for Debian's /usr/bin/python3 (tests/medical_interop_test.py)
+#   scripts/install-deps.sh --bench  also Debian's VTK and NumPy for Python 3 (bench/slicer_pipeline.py,
+#                                    the 3D Slicer peer, and bench/accuracy.sh; benchmarks only)
 #   scripts/install-deps.sh --fuzz   also clang with its sanitizer/libFuzzer runtimes and OpenMP
 #                                    (scripts/sanitize.sh, scripts/fuzz.sh); implies --dev
 #   scripts/install-deps.sh --python also what `pip install --no-build-isolation .` needs offline
@@ -18,17 +20,19 @@ set -euo pipefail
 packages=(build-essential cmake pkg-config libeigen3-dev libsuitesparse-dev libopenblas-dev zlib1g-dev
           libcli11-dev nlohmann-json3-dev libcgal-dev libjs-three libinsighttoolkit5-dev libgdcm-tools)
 dev=(libgtest-dev libgmock-dev libbenchmark-dev python3 python3-numpy python3-nibabel python3-vtk9)
+bench=(python3 python3-vtk9 python3-numpy)
 python=(python3-dev python3-numpy python3-venv python3-setuptools python3-wheel pybind11-dev)
 python_dev=(python3-pytest python3-meshio)
 with_dev=false with_python=false
 for option in "$@"; do
     case $option in
         --dev) packages+=("${dev[@]}"); with_dev=true ;;
+        --bench) packages+=("${bench[@]}") ;;
         --fuzz) packages+=("${dev[@]}" clang libclang-rt-14-dev libomp-dev) ;;
         --python) packages+=("${python[@]}"); with_python=true ;;
         --viewer) packages+=(chromium python3-pil) ;;
         --mpi) packages+=(openmpi-bin libopenmpi-dev petsc-dev) ;;
-        *) echo "usage: $0 [--dev] [--fuzz] [--python] [--viewer] [--mpi]" >&2; exit 2 ;;
+        *) echo "usage: $0 [--dev] [--bench] [--fuzz] [--python] [--viewer] [--mpi]" >&2; exit 2 ;;
     esac
 done
 $with_dev && $with_python && packages+=("${python_dev[@]}")

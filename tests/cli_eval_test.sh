@@ -102,6 +102,21 @@ check "digitize prints the grid" grep -q "^dims [0-9]*,[0-9]*,[0-9]* spacing 0.5
 "$DSREG" regularize "$work/g.vol" -o "$work/g-file.obj" --report "$work/g-file.json" -q
 surfels() { grep -o '"surfels": [0-9]*' "$1"; }
 check "digitize: same surfels as --shape" test "$(surfels "$work/g-shape.json")" = "$(surfels "$work/g-file.json")"
+"$DSREG" regularize "$work/g.vol" -o "$work/g-file.obj" --input-mesh "$work/g-digital.obj" -q
+vjson=$("$DSREG" eval "$work/g-digital.obj" --volume "$work/g.vol" --json)
+check "eval --volume: the digital surface gets every voxel" test "$(grep -c 'share": 1.0' <<<"$vjson")" -eq 3
+vtable=$("$DSREG" eval "$work/g-file.obj" --volume "$work/g.vol")
+check "eval --volume table: next to the surface" grep -q "next to the surface" <<<"$vtable"
+json_g=$("$DSREG" eval "$work/g-shape.obj" --shape goursat --h 0.5 --json)
+check "eval --shape: object and boundary shares" grep -q '"boundary_share"' <<<"$json_g"
+"$DSREG" eval "$work/g-file.obj" --shape goursat --h 0.5 --voxel-coordinates --face-errors "$work/g-faces.csv" >/dev/null
+check "eval --face-errors: a line per face" test "$(($(wc -l <"$work/g-faces.csv") - 1))" -eq "$(grep -c '^f ' "$work/g-file.obj")"
+expect_error "eval --face-errors with --volume" "--face-errors" eval "$work/g-file.obj" --volume "$work/g.vol" --face-errors "$work/x.csv"
+check "eval: no CSV after an error" test ! -e "$work/x.csv"
+expect_error "eval without truth" "--volume" eval "$work/g-file.obj"
+expect_error "eval --volume with --h" "--volume" eval "$work/g-file.obj" --volume "$work/g.vol" --h 0.5
+expect_error "eval --min without --volume" "--min" eval "$work/g-file.obj" --shape goursat --min 1
+expect_error "eval --volume missing file" "nothere.vol" eval "$work/g-file.obj" --volume "$work/nothere.vol"
 expect_error "digitize without --shape" "--shape" digitize --h 0.5 -o "$work/out.vol"
 expect_error "digitize to a mesh" ".vol" digitize --shape goursat --h 0.5 -o "$work/out.obj"
 expect_error "digitize unknown shape" "blob" digitize --shape blob -o "$work/out.vol"

@@ -22,9 +22,12 @@ max_difference() {
 }
 below() { awk -v a="$1" -v b="$2" 'BEGIN {exit !(a < b)}'; }
 
+# Block-wise runs have a fixed radius and neither the thin-part weights nor the shrink correction
+# (plan_block_run): the serial runs they are compared with get the same options.
+blockwise="--radius 2.5 --alpha-reach 0 --shrink-correction 0"
 # dsreg-mpi writes the mesh dsreg regularize writes (same faces, vertices within 1e-6 voxel).
-"$DSREG_SERIAL" regularize --shape goursat --h 0.5 --solver cholmod -o "$work/serial.obj" -q
-log=$("$DSREG" --shape goursat --h 0.5 --max-error 1e-7 -o "$work/mpi.obj" --report "$work/mpi.json" \
+"$DSREG_SERIAL" regularize --shape goursat --h 0.5 $blockwise --solver cholmod -o "$work/serial.obj" -q
+log=$("$DSREG" --shape goursat --h 0.5 --radius 2.5 --max-error 1e-7 -o "$work/mpi.obj" --report "$work/mpi.json" \
       --fragments "$work/fragments" -v 2>&1)
 check "dsreg-mpi exits 0" test $? -eq 0
 check "same faces, same order" cmp -s <(faces "$work/serial.obj") <(faces "$work/mpi.obj")
@@ -47,12 +50,13 @@ expect_error "AT normals refused" "--normals at" --shape sphere9 --h 1 --normals
 expect_error "clamp refused" "--clamp" --shape sphere9 --h 1 --clamp -o "$work/out.obj"
 expect_error "streaming refused" "--block-size" --shape sphere9 --h 1 --block-size 8 -o "$work/out.obj"
 expect_error "max-memory refused" "--max-memory" --shape sphere9 --h 1 --max-memory 4G -o "$work/out.obj"
+expect_error "thin-part weights refused" "--alpha-reach" --shape sphere9 --h 1 --alpha-reach 12 -o "$work/out.obj"
 expect_error "bad flag" "--no-such-flag" --shape sphere9 --no-such-flag -o "$work/out.obj"
 expect_error "missing output folder" "no/such" --shape sphere9 --h 1 -o "$work/no/such/out.obj"
 
 # dsreg regularize --block-size: the same faces, a report with the bound, fragments.
-"$DSREG_SERIAL" regularize --shape goursat --h 0.7 --solver cholmod -o "$work/whole.obj" -q
-"$DSREG_SERIAL" regularize --shape goursat --h 0.7 --block-size 12 --block-halo 6 --schwarz-sweeps 1 \
+"$DSREG_SERIAL" regularize --shape goursat --h 0.7 $blockwise --solver cholmod -o "$work/whole.obj" -q
+"$DSREG_SERIAL" regularize --shape goursat --h 0.7 --radius 2.5 --block-size 12 --block-halo 6 --schwarz-sweeps 1 \
     -o "$work/streamed.obj" --report "$work/streamed.json" --fragments "$work/streamed" -q
 check "streaming exits 0" test $? -eq 0
 check "streaming: same faces, same order" cmp -s <(faces "$work/whole.obj") <(faces "$work/streamed.obj")

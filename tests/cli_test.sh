@@ -69,11 +69,28 @@ check "convolved trivial normals" test -s "$work/ct.obj"
 "$DSREG" regularize --shape sphere9 --h 1 --ii-kernel ball --ii-extrapolate -o "$work/ext.obj" --report "$work/ext.json" -q
 check "extrapolated ball integral invariants" grep -q '"ii_extrapolated": true' "$work/ext.json"
 check "report names the kernel" grep -q '"ii_kernel": "ball"' "$work/ext.json"
-"$DSREG" regularize --shape sphere1 -o "$work/s1.obj" --report "$work/s1.json" -q
-check "default radius at most 1/8 of a small shape's box" \
+"$DSREG" regularize --shape sphere1 --normals ctrivial -o "$work/s1.obj" --report "$work/s1.json" -q
+check "default fixed radius at most 1/8 of a small shape's box" \
     python3 -c "import json,sys; r=json.load(open(sys.argv[1]))['parameters']['radius']; sys.exit(0 if 0 < r <= 2.1 / 8 + 1e-9 else 1)" "$work/s1.json"
-"$DSREG" regularize --shape sphere9 --h 1 --ii-kernel ball -o "$work/noext.obj" --report "$work/noext.json" -q
-check "default radius doubles with --ii-extrapolate" python3 -c "import json,sys; r=[json.load(open(f))['parameters']['radius'] for f in sys.argv[1:]]; sys.exit(0 if abs(r[0] - 2 * r[1]) < 1e-12 else 1)" "$work/ext.json" "$work/noext.json"
+"$DSREG" regularize --shape sphere9 --h 1 --normals ctrivial -o "$work/noext.obj" --report "$work/noext.json" -q
+check "default fixed radius doubles with --ii-extrapolate" python3 -c "import json,sys; r=[json.load(open(f))['parameters']['radius'] for f in sys.argv[1:]]; sys.exit(0 if abs(r[0] - 2 * r[1]) < 1e-12 else 1)" "$work/ext.json" "$work/noext.json"
+# The default field: adaptive integral invariants, radii from 2 to 14 voxels; thin-part data
+# weights and the shrink correction in the report.
+"$DSREG" regularize --shape "(x^2+y^2+z^2+9-0.140625)^2-36*(x^2+y^2)" --box 3.6 --h 0.25 -o "$work/tube.obj" \
+    --report "$work/tube.json" -q
+adaptive() { python3 -c "import json,sys; j=json.load(open(sys.argv[1])); print(j['adaptive_ii'][sys.argv[2]])" "$@"; }
+check "adaptive: radii capped on a thin tube" awk -v r="$(adaptive "$work/tube.json" radius_max)" 'BEGIN { exit !(r <= 2.5 + 1e-9) }'
+check "adaptive: 2 voxels on a thin tube" awk -v r="$(adaptive "$work/tube.json" radius_min)" 'BEGIN { exit !(r == 0.5) }'
+check "report: thin-part alpha" grep -q '"thin_part_alpha"' "$work/tube.json"
+check "report: shrink correction" grep -q '"shrink_correction"' "$work/tube.json"
+check "report: no fixed radius" grep -q '"radius": null' "$work/tube.json"
+"$DSREG" regularize --shape sphere9 --h 1 --ii-max-radius 4 -o "$work/max.obj" --report "$work/max.json" -q
+check "--ii-max-radius" awk -v r="$(adaptive "$work/max.json" radius_max)" 'BEGIN { exit !(r == 4) }'
+expect_error "--ii-max-radius with --radius" "--ii-max-radius" regularize --shape sphere1 --h 0.25 --radius 0.5 --ii-max-radius 1 -o "$work/out.obj"
+expect_error "--ii-max-radius not positive" "--ii-max-radius" regularize --shape sphere1 --h 0.25 --ii-max-radius 0 -o "$work/out.obj"
+expect_error "--alpha-reach negative" "--alpha-reach" regularize --shape sphere1 --h 0.25 --alpha-reach -1 -o "$work/out.obj"
+expect_error "--shrink-correction with --clamp" "--clamp" regularize --shape sphere1 --h 0.25 --clamp --shrink-correction 10 -o "$work/out.obj"
+expect_error "--shrink-correction negative" "--shrink-correction" regularize --shape sphere1 --h 0.25 --shrink-correction -2 -o "$work/out.obj"
 expect_error "unknown ii kernel" "ii-kernel" regularize --shape sphere1 --h 0.25 --ii-kernel gauss -o "$work/out.obj"
 expect_error "unknown option" "frobnicate" regularize --shape sphere1 --h 0.25 --frobnicate -o "$work/out.obj"
 expect_error "missing output" "output" regularize --shape sphere1 --h 0.25

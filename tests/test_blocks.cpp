@@ -338,8 +338,9 @@ TEST(Blocks, StreamingStaysWithinItsBoundAndWeldsAClosedSurface) {
     PipelineOptions options;
     options.solver = SolverKind::Cholmod;
     options.validity = ValidityMode::Off;  // the bound is the solve's (the repair's test is below)
-    const PipelineResult whole = run_pipeline(source, options);
     PipelineOptions blocks = options;
+    options = plan_block_run(source, options, "--block-size").options;  // what blocks can do, whole
+    const PipelineResult whole = run_pipeline(source, options);
     blocks.solver = SolverKind::Auto;
     blocks.max_error_voxels = 1e-7;
     blocks.blocks.block_size = {10, 10, 10};

@@ -14,6 +14,7 @@
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
+#include "dsreg/evaluation_report.hpp"
 #include "dsreg/normals.hpp"
 #include "test_support.hpp"
 
@@ -409,6 +410,33 @@ TEST(EvaluateMesh, FineSphereMeshOnACoarseGridClassifiesEveryVoxel) {
     EXPECT_LT(moved.voxels.share(), 0.99);
 }
 
+TEST(ClassifyVoxelCentres, CountsTheObjectAndTheVoxelsNextToTheSurfaceApart) {
+    // A 4×4×4 block of object voxels (indices 2…5) in an 8³ grid.
+    const BinaryVolume volume = test::make_volume({8, 8, 8}, [](double x, double y, double z) {
+        return x >= 2 && x <= 5 && y >= 2 && y <= 5 && z >= 2 && z <= 5;
+    });
+    // Its exact boundary: every centre agrees.
+    const VoxelClassification exact = classify_voxel_centres(box_mesh(Vec3(1.5, 1.5, 1.5), Vec3(5.5, 5.5, 5.5), 4), volume);
+    EXPECT_EQ(exact.correct, 512);
+    EXPECT_EQ(exact.object_correct, 64);
+    EXPECT_EQ(exact.object_total, 64);
+    // Next to the surface: the 56 outer object voxels and the 6·16 background voxels facing them.
+    EXPECT_EQ(exact.boundary_total, 56 + 96);
+    EXPECT_EQ(exact.boundary_correct, 56 + 96);
+    // Shrunk to the 2×2×2 core: the 56 outer object voxels fall outside.
+    const VoxelClassification shrunk = classify_voxel_centres(box_mesh(Vec3(2.5, 2.5, 2.5), Vec3(4.5, 4.5, 4.5), 2), volume);
+    EXPECT_EQ(shrunk.correct, 512 - 56);
+    EXPECT_EQ(shrunk.object_correct, 8);
+    EXPECT_EQ(shrunk.boundary_correct, 96);
+    EXPECT_NEAR(shrunk.boundary_share(), 96.0 / 152.0, 1e-15);
+    // Grown by a voxel: the 96 background voxels next to the surface fall inside (and 56 more at
+    // the edges and corners of the grown box, which are not next to the surface).
+    const VoxelClassification grown = classify_voxel_centres(box_mesh(Vec3(0.5, 0.5, 0.5), Vec3(6.5, 6.5, 6.5), 6), volume);
+    EXPECT_EQ(grown.object_correct, 64);
+    EXPECT_EQ(grown.boundary_correct, 56);
+    EXPECT_EQ(grown.correct, 512 - (216 - 64));
+}
+
 TEST(EvaluateMesh, BoxAgainstAPlaneClippedBlockLeavesOutTheWalls) {
     // The solid z ≤ 0.5 clipped by [-1,1]³ is the block [-1,1]²×[-1,0.5]. Its box mesh: the only
     // part of F = 0 is the top face; the other faces lie on the box walls and are left out.
@@ -434,6 +462,62 @@ TEST(EvaluateMesh, RejectsEmptyAndMalformedMeshes) {
     PolygonMesh bad = octahedron();
     bad.faces(0, 0) = 99;
     EXPECT_THROW(evaluate_mesh(bad, make_shape("sphere1"), fast_options()), Error);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The `dsreg eval` job (evaluation_report.hpp)
+
+EvaluationRequest sphere_request(double h) {
+    EvaluationRequest request;
+    request.truth.shape = "sphere1";
+    request.h = h;
+    request.volume_cells = 16;
+    return request;
+}
+
+TEST(RunEvaluation, VoxelCoordinatesMapTheMeshBackToTheShapesFrame) {
+    const double h = 0.1;
+    const PolygonMesh mesh = icosphere(3);
+    const VoxelGrid grid = digitize(make_shape("sphere1"), h).grid;
+    PolygonMesh in_voxels = mesh;  // the same mesh in the digitization's voxel frame
+    for (Eigen::Index i = 0; i < mesh.vertices.rows(); ++i)
+        in_voxels.vertices.row(i) = (mesh.vertices.row(i) - grid.voxel_center(0, 0, 0).transpose()).cwiseQuotient(grid.spacing.transpose());
+
+    EvaluationRequest request = sphere_request(h);
+    const EvaluationRun direct = run_evaluation(mesh, "m", request);
+    request.voxel_coordinates = true;
+    const EvaluationRun mapped = run_evaluation(in_voxels, "m", request);
+    EXPECT_NEAR(mapped.evaluation.vertex_distance.linf, direct.evaluation.vertex_distance.linf, 1e-12);
+    EXPECT_NEAR(mapped.evaluation.normal_angle_deg.mean, direct.evaluation.normal_angle_deg.mean, 1e-9);
+    EXPECT_EQ(mapped.evaluation.voxels.correct, direct.evaluation.voxels.correct);
+    EXPECT_LT(direct.evaluation.vertex_distance.linf, 0.01);  // the icosphere lies on the unit sphere
+}
+
+TEST(RunEvaluation, FoldedFacesAreCountedAgainstTheMeshsOwnField) {
+    PolygonMesh mesh = icosphere(2);
+    const EvaluationRequest request = sphere_request(0.2);
+    const nlohmann::json without = evaluation_report(run_evaluation(mesh, "m", request), "m");
+    EXPECT_TRUE(without["validity"]["folded_faces"].is_null());
+    EXPECT_EQ(without["validity"]["intersecting_pairs"], 0);
+
+    mesh.face_normals = face_normals(mesh.vertices, mesh.faces);
+    EXPECT_EQ(run_evaluation(mesh, "m", request).validity.folded_faces, 0);
+    mesh.face_normals = -mesh.face_normals;
+    const EvaluationRun against = run_evaluation(mesh, "m", request);
+    EXPECT_EQ(against.validity.folded_faces, mesh.faces.rows());
+    EXPECT_EQ(evaluation_report(against, "m")["validity"]["folded_faces"], mesh.faces.rows());
+}
+
+TEST(RunEvaluation, VolumeExcludesTheShapesFlagsAndShapeFlagsNeedAShape) {
+    EvaluationRequest request = sphere_request(0.1);
+    request.volume = "v.vol";
+    EXPECT_THROW(check_evaluation_request(request), Error);  // --volume with --shape and --h
+    EvaluationRequest no_truth;
+    EXPECT_THROW(check_evaluation_request(no_truth), Error);
+    EvaluationRequest range = sphere_request(0.1);
+    range.min_value = 1.0;
+    EXPECT_THROW(check_evaluation_request(range), Error);
+    EXPECT_TRUE(check_evaluation_request(sphere_request(0.1)).has_value());
 }
 
 // ---------------------------------------------------------------------------------------------

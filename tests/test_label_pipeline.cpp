@@ -225,7 +225,8 @@ TEST(LabelPipeline, InterfaceNormalsNearJunctionsBeatTheIndicatorsIntegralInvari
         const PipelineResult result = run_pipeline(loaded, cholmod_options());
         EXPECT_GT(result.field.interface_normal_faces, result.surface.face_count() / 10);
         const DigitalSurface& surface = result.surface;
-        const PointMatrix u = integral_invariant_normals(*loaded.labels, surface, result.field.radius.value());
+        ASSERT_TRUE(result.field.adaptive.has_value());  // the default field: adaptive integral invariants
+        const PointMatrix& u = result.field.adaptive->normals;  // of the inner label, junctions included
         SolverOptions solver;
         solver.kind = SolverKind::Cholmod;
         const RegularizationResult indicator_only = regularize(surface, u, RegularizationWeights{}, solver);

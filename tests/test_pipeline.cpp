@@ -6,7 +6,10 @@
 #include <fstream>
 #include <map>
 
+#include "dsreg/adaptive_normals.hpp"
 #include "dsreg/error.hpp"
+#include "dsreg/local_weights.hpp"
+#include "dsreg/shrink_correction.hpp"
 #include "dsreg/mesh_io.hpp"
 #include "dsreg/normals.hpp"
 #include "dsreg/pipeline.hpp"
@@ -35,20 +38,63 @@ TEST(Pipeline, EqualsTheStagesCalledByHand) {
     options.solver = SolverKind::Cholmod;
     const PipelineResult result = run_pipeline(loaded, options);
 
+    // The defaults by hand: the adaptive integral invariants, the thin-part data weights from
+    // their reach (reference 12 voxels), the solve, the shrink correction (40 steps).
     const DigitalSurface surface = extract_digital_surface(loaded.volume, Connectivity::TwentySix);
-    const double radius = default_field_radius(options.normals, "ii", loaded);
-    EXPECT_DOUBLE_EQ(radius, 5.0);  // files: 5 voxels with the biweight kernel
-    const PointMatrix u = integral_invariant_normals(loaded.volume, surface, radius);
+    const AdaptiveNormalOptions adaptive = default_adaptive_options(options.normals, loaded);
+    EXPECT_DOUBLE_EQ(adaptive.max_radius, 14.0);  // voxels of a file
+    const AdaptiveNormalField field = adaptive_integral_invariant_normals(loaded.volume, surface, adaptive);
+    RegularizationWeights weights;
+    weights.vertex_alpha = thin_part_alpha(surface, field.reach.smallest(), 12.0);
     SolverOptions solver;
     solver.kind = SolverKind::Cholmod;
-    const RegularizationResult expected = regularize(surface, u, RegularizationWeights{}, solver);
+    const RegularizationResult solved = regularize(surface, field.normals, weights, solver);
+    const ShrinkCorrection expected = correct_shrink(surface, solved.positions, field.normals, 40);
 
     ASSERT_EQ(result.surface.face_count(), surface.face_count());
     EXPECT_EQ((result.surface.quads - surface.quads).cwiseAbs().maxCoeff(), 0);
-    EXPECT_LT((result.field.normals - u).cwiseAbs().maxCoeff(), 1e-15);
+    EXPECT_LT((result.field.normals - field.normals).cwiseAbs().maxCoeff(), 1e-15);
+    EXPECT_LT((result.weights.vertex_alpha - weights.vertex_alpha).cwiseAbs().maxCoeff(), 1e-15);
     EXPECT_LT((result.regularization.positions - expected.positions).cwiseAbs().maxCoeff(), 1e-12);
     EXPECT_EQ(result.object_voxels, loaded.volume.object_voxel_count());
     EXPECT_EQ(result.faces_against_field, 0);
+}
+
+TEST(Pipeline, RoundOffOfTheSpacingMovesTheMeshByRoundOffOnly) {
+    // The spacing (1, 0.8, 1.2) of one float32 NIfTI affine as ITK reads it and as the column
+    // norms of nibabel's affine give it: the defaults take no discrete decision from the
+    // round-off (radius levels, reach steps, which reach the thin-part weights use: with these
+    // two, 13·s ≥ 12·s + s holds for one and not the other), so the meshes agree to ~1e-9 (they
+    // differed by 3e-3 voxel).
+    LoadedVolume exact = loaded_ball();
+    exact.volume.grid.spacing = Eigen::Vector3d(1.0, 0.800000011920929, 1.2000000476837158);
+    LoadedVolume rounded = exact;
+    rounded.volume.grid.spacing = Eigen::Vector3d(0.9999999938786497, 0.8000000104982703, 1.2000000410192275);
+    const PipelineResult a = run_pipeline(exact, PipelineOptions{});
+    const PipelineResult b = run_pipeline(rounded, PipelineOptions{});
+    ASSERT_EQ(a.surface.quads, b.surface.quads);
+    const double extent = a.regularization.positions.cwiseAbs().maxCoeff();
+    EXPECT_LT((a.regularization.positions - b.regularization.positions).cwiseAbs().maxCoeff(), 1e-6 * extent);
+}
+
+TEST(Pipeline, FixedRadiusAndNoCorrectionsIsThePapersPipeline) {
+    // --radius 5 --alpha-reach 0 --shrink-correction 0: integral invariants of one radius and
+    // the paper's energy, nothing else.
+    const LoadedVolume loaded = loaded_ball();
+    PipelineOptions options;
+    options.solver = SolverKind::Cholmod;
+    options.normals.radius = 5.0;
+    options.extensions.alpha_reach = 0.0;
+    options.extensions.shrink_correction = 0;
+    const PipelineResult result = run_pipeline(loaded, options);
+    const DigitalSurface surface = extract_digital_surface(loaded.volume, Connectivity::TwentySix);
+    const PointMatrix u = integral_invariant_normals(loaded.volume, surface, 5.0);
+    SolverOptions solver;
+    solver.kind = SolverKind::Cholmod;
+    const RegularizationResult expected = regularize(surface, u, RegularizationWeights{}, solver);
+    EXPECT_LT((result.field.normals - u).cwiseAbs().maxCoeff(), 1e-15);
+    EXPECT_EQ(result.weights.vertex_alpha.size(), 0);
+    EXPECT_LT((result.regularization.positions - expected.positions).cwiseAbs().maxCoeff(), 1e-12);
 }
 
 TEST(Pipeline, ReportsEveryStageOnceStartedThenFinishedInOrder) {

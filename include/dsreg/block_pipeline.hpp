@@ -45,8 +45,11 @@ struct BlockPlan {
 /// Checks the options of a block-wise run, refusing those that need the whole surface at once
 /// (--normals at, --normals-file, --clamp, local weight maps and files) and --max-memory (its
 /// estimate is the whole-volume run's) with a dsreg::Error
-/// naming the flag and `driver` (e.g. "--block-size" or "dsreg-mpi"); probes the volume; fixes the
-/// radius of the normal field to the whole-volume one.
+/// naming the flag and `driver` (e.g. "--block-size" or "dsreg-mpi"), and the defaults measured on
+/// the whole object (--ii-max-radius, --alpha-reach, --shrink-correction: refused when given);
+/// probes the volume; fixes the radius of the normal field to the whole-volume one (the fixed-radius
+/// field, not the adaptive default) and turns the thin-part weights and the shrink correction off.
+/// So a block-wise run equals the whole-volume run of `options` of the plan, not of the defaults.
 BlockPlan plan_block_run(const VolumeSource& source, const PipelineOptions& options, const std::string& driver);
 
 /// What one block contributes. Its patch covers the vertices keyed in `rows` (⊇ owned).

@@ -141,11 +141,30 @@ struct MeshEvaluationOptions {
     int volume_cells = 64;  ///< cells_per_axis of shape_volume()
 };
 
+/// On how many voxel centres of a binary volume a closed mesh agrees with the volume (centre
+/// inside the mesh ⇔ object voxel), over three sets of voxels:
+///  * all the voxels of the grid (far from the surface nearly every one agrees, so on a large
+///    box this share is close to 1 whatever the mesh);
+///  * the object voxels ("object": a mesh that shrinks a thin part loses them);
+///  * the voxels next to the digital surface: object and background voxels with a 6-neighbour of
+///    the other kind, the border of the grid counting as background ("boundary"). Every voxel
+///    a mesh can plausibly misclassify is there, from either side, so this share is the strict one.
 struct VoxelClassification {
-    std::int64_t correct = 0;  ///< voxel centres on which the mesh and the digitization agree
-    std::int64_t total = 0;    ///< voxels of digitize(shape, grid_step)
+    std::int64_t correct = 0;  ///< voxel centres on which the mesh and the volume agree
+    std::int64_t total = 0;    ///< voxels of the grid
+    std::int64_t object_correct = 0, object_total = 0;
+    std::int64_t boundary_correct = 0, boundary_total = 0;
     double share() const { return total > 0 ? double(correct) / double(total) : 0.0; }
+    double object_share() const { return object_total > 0 ? double(object_correct) / double(object_total) : 0.0; }
+    double boundary_share() const {
+        return boundary_total > 0 ? double(boundary_correct) / double(boundary_total) : 0.0;
+    }
 };
+
+/// Classifies the voxel centres of `volume` by the closed triangle or quad mesh (quads split
+/// along their shorter diagonal, voxel_centres_inside) against the volume's own labels. Throws
+/// dsreg::Error for an empty mesh or faces that are not triangles or quads.
+VoxelClassification classify_voxel_centres(const PolygonMesh& mesh, const BinaryVolume& volume);
 
 struct MeshEvaluation {
     std::int64_t vertices_evaluated = 0;
@@ -156,6 +175,7 @@ struct MeshEvaluation {
 
     ErrorStats vertex_distance;   ///< |p − ξ(p)| per vertex, physical units
     ErrorStats normal_angle_deg;  ///< angle between face normal and true normal at ξ(face centroid)
+    std::vector<double> face_angle_deg;  ///< that angle per face (NaN where not evaluated)
 
     double mesh_volume = 0;            ///< signed, divergence theorem
     double shape_volume = 0;           ///< shape_volume(shape)

@@ -1,7 +1,7 @@
 // dsreg — sources of the local multipliers α_i, β_f, γ_i of the regularization energy
 // (RegularizationWeights::vertex_alpha, face_beta, vertex_gamma; beyond the paper).
 //
-// Two sources:
+// Three sources:
 //  * a scalar volume on the same voxel grid as the binary volume the surface came from (e.g. a
 //    confidence or probability map of a segmentation), sampled at the vertices: the value of a
 //    vertex is the mean of the values of the 8 voxels around its pointel — voxels (a−1 … a,
@@ -11,6 +11,8 @@
 //    order of the surface (DigitalSurface::vertices / quads), which is also the order of the
 //    written mesh files. Numbers are separated by whitespace; '#' starts a comment that runs to
 //    the end of the line.
+//  * the local reach of the surface (local_reach.hpp): a stronger data term on thin parts
+//    (thin_part_alpha).
 // Values are used as given (dimensionless multipliers); validate_weights() rejects α_i ≤ 0 and
 // β_f, γ_i < 0.
 #pragma once
@@ -36,6 +38,16 @@ Eigen::VectorXd face_means(const FaceMatrix& faces, const Eigen::VectorXd& verte
 /// values in messages (e.g. "per-vertex alpha"). Throws dsreg::Error "PATH:LINE: problem" for a
 /// token that is not a finite number, and "PATH: …" for too few or too many values.
 Eigen::VectorXd read_values_file(const std::string& path, std::int64_t expected_count, const std::string& what);
+
+/// The data-term multipliers α_i = max(1, (reference / ρ_i)²) of a surface whose faces have the
+/// reach `face_reach` (physical units, e.g. SurfelReach::smallest()), ρ_i being the smallest
+/// reach of the faces around vertex i. Why: the alignment term is a sum of squared edge
+/// lengths, so shrinking a part lowers it; against the data term α|p̂ − p|² that shrink costs
+/// α·ρ² on a part of reach ρ, so with one α a part shrinks more the thinner it is (a tube 2.4
+/// voxels in radius loses half its volume with α = 1e-3). With α ∝ 1/ρ² below the reference the
+/// balance, and so the relative shrink, no longer depends on the thickness (docs/accuracy.md).
+/// Throws dsreg::Error for a reference that is not positive and finite or a wrong face count.
+Eigen::VectorXd thin_part_alpha(const DigitalSurface& surface, const Eigen::VectorXd& face_reach, double reference);
 
 /// Writes one value per line with 17 significant digits, so read_values_file() gives back the
 /// same doubles (atomic write).

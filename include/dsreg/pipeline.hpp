@@ -22,6 +22,7 @@
 #include <utility>
 #include <vector>
 
+#include "dsreg/adaptive_normals.hpp"
 #include "dsreg/ambrosio_tortorelli.hpp"
 #include "dsreg/blocks.hpp"
 #include "dsreg/digital_surface.hpp"
@@ -80,6 +81,9 @@ struct LoadedVolume {
     double h = 1;                        ///< grid step (largest spacing for files and arrays)
     VolumeFileInfo file;                 ///< format, value type and notes of a file input (format "array" for arrays)
     std::vector<std::string> warnings;   ///< e.g. an object taking most of the volume
+
+    /// The voxels' labels: the label map's, or the object's (label 1).
+    VoxelLabels voxel_labels() const { return labels ? VoxelLabels(*labels) : VoxelLabels(volume); }
 };
 
 /// Reads, digitizes or thresholds the volume. Honours max_voxels and max_memory before reading
@@ -147,7 +151,8 @@ double default_grid_step(const ImplicitShape& shape);
 struct NormalFieldOptions {
     std::string kind;  ///< --normals: ii trivial ctrivial exact at; empty: ii (or the field of --normals-file)
     std::optional<std::string> at_input;  ///< --at-input: the field g that AT regularizes (default ii)
-    std::optional<double> radius;         ///< --radius (physical units); unset = the default below
+    std::optional<double> radius;         ///< --radius (physical units): a fixed radius; unset = adaptive
+    std::optional<double> max_radius;     ///< --ii-max-radius (physical units) of the adaptive field
     std::string ii_kernel = "biweight";   ///< --ii-kernel: ball or biweight
     bool ii_extrapolate = false;          ///< --ii-extrapolate: 2·n(r/√2) − n(r)
     std::string file;                     ///< --normals-file: g (with --normals at) or the field itself
@@ -163,6 +168,12 @@ void parse_epsilon_range(const std::string& text, AmbrosioTortorelliParameters& 
 /// Throws dsreg::Error naming the flag.
 void check_normal_field_options(const NormalFieldOptions& options, bool input_is_shape);
 
+/// The default field, `--normals ii` without --radius or --ii-extrapolate, is the adaptive one
+/// (adaptive_normals.hpp) with these radii (physical units): the largest 14 voxels (--ii-max-radius),
+/// the smallest 2 voxels (of the smallest spacing), 1.5 times the reach, extrapolated from 6 voxels up, 4 smoothing steps
+/// below 5 voxels; voxel = the largest spacing.
+AdaptiveNormalOptions default_adaptive_options(const NormalFieldOptions& options, const LoadedVolume& loaded);
+
 /// How far from a face the normal field of these options looks, for block-wise runs: the field
 /// must be the same in every block, so the options come back with the radius the whole-volume
 /// run would use filled in.
@@ -176,7 +187,8 @@ struct NormalFieldReach {
 /// Ambrosio–Tortorelli solve is global; --normals-file: the file lists the whole surface).
 NormalFieldReach normal_field_reach(const NormalFieldOptions& options, const LoadedVolume& header);
 
-/// The integral-invariant (or convolved trivial) radius used when --radius is not given: for a
+/// The integral-invariant (or convolved trivial) radius used when --radius is not given (and the
+/// field is not the adaptive one: --ii-extrapolate, --normals ctrivial): for a
 /// shape the multigrid-convergent 3·h^(1/3) (DESIGN.md), at most 1/8 of the largest side of its
 /// box (3·h^(1/3) suits shapes about 10 across; on smaller ones it would make a ball as wide as the
 /// shape); for a file 3 voxels, or 5 voxels for ii with the biweight kernel (its weights fade
@@ -191,6 +203,7 @@ struct NormalField {
     std::optional<double> radius;                ///< radius used, if any
     std::optional<std::string> ii_kernel;        ///< kernel of the integral invariants, if used
     bool ii_extrapolated = false;                ///< Richardson-extrapolated integral invariants
+    std::optional<AdaptiveNormalField> adaptive;  ///< set for the adaptive field (radii, reach)
     std::optional<AmbrosioTortorelliResult> at;  ///< set for --normals at
     /// Label maps: faces near a junction given the convolved trivial normals of their own
     /// interface (use_interface_normals_near_junctions, normals.hpp).
@@ -207,6 +220,13 @@ struct RegularizationExtensions {
     double clamp_tolerance = 1e-10;   ///< relative KKT residual the clamped solve must reach
     double clamp_half_width = 0.499;  ///< box half-width in voxels (< 0.5: docs/clamped.md)
     std::string metric = "identity";  ///< W0, W2: identity or area
+    /// --alpha-reach: the data term is weighted max(1, (R/ρ)²) at vertices of reach ρ below R
+    /// (thin_part_alpha, local_weights.hpp); physical units; unset = 12 voxels (the largest
+    /// spacing); 0 = off. Multiplies --alpha-map / --alpha-file when both are given.
+    std::optional<double> alpha_reach;
+    /// --shrink-correction: averaging steps of correct_shrink (shrink_correction.hpp) applied to
+    /// the solve's result; unset = 40 (off with --clamp, whose boxes it could leave); 0 = off.
+    std::optional<int> shrink_correction;
     std::string alpha_map, beta_map, gamma_map;     ///< scalar volumes on the input grid
     std::string alpha_file, beta_file, gamma_file;  ///< text files, one value per vertex (face for beta)
     RawVolumeLayout map_raw_layout;  ///< value type, byte order and header of .raw maps (dims: the input's)
@@ -272,7 +292,7 @@ struct PipelineResult {
     /// repair, regularization.positions and field.normals are the repaired ones (the solve's
     /// energies stay in regularization; the repair's are here).
     std::optional<ValidityRepairReport> validity;
-    nlohmann::json extension_report;  ///< "metric", "local_weights", and "clamp" with --clamp
+    nlohmann::json extension_report;  ///< "metric", "local_weights", "shrink_correction", and "clamp" with --clamp
     std::vector<std::pair<std::string, double>> stage_seconds;  ///< wall time of each stage, in order
     std::optional<BlockLayout> block_layout;  ///< the blocks of a block-wise run (streaming or MPI)
     // Label maps only (--multi-label; empty otherwise):

@@ -102,6 +102,30 @@ struct LabelVolume {
     std::vector<std::int64_t> voxel_counts() const;
 };
 
+/// A read-only view of the label index of every voxel, of a binary volume (object 1,
+/// background 0) or of a label map, for the stages that treat both alike (the adaptive normals,
+/// the local reach). It points to the volume it was made from, which must outlive it.
+class VoxelLabels {
+public:
+    VoxelLabels(const BinaryVolume& volume) : grid_(&volume.grid), mask_(volume.mask.data()) {}  // NOLINT: implicit
+    VoxelLabels(const LabelVolume& volume) : grid_(&volume.grid), labels_(volume.labels.data()) {}  // NOLINT: implicit
+
+    const VoxelGrid& grid() const { return *grid_; }
+    /// Label index of voxel (i,j,k); 0 outside the grid.
+    std::uint32_t at(std::int64_t i, std::int64_t j, std::int64_t k) const {
+        return grid_->contains(i, j, k) ? at_linear(grid_->linear_index(i, j, k)) : 0u;
+    }
+    std::uint32_t at_linear(std::int64_t index) const {
+        return labels_ ? labels_[index] : (mask_[index] != 0 ? 1u : 0u);
+    }
+    bool is_binary() const { return labels_ == nullptr; }
+
+private:
+    const VoxelGrid* grid_;
+    const std::uint8_t* mask_ = nullptr;
+    const std::uint32_t* labels_ = nullptr;
+};
+
 /// The binary volume as a label map: label 1 (value 1) for the object, 0 elsewhere.
 LabelVolume label_volume_from_mask(const BinaryVolume& volume);
 

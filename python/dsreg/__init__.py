@@ -301,34 +301,44 @@ def digitize(shape: str, h=None, **options):
     return _dsreg.digitize(args)
 
 
-def evaluate(mesh, shape: str, h=None, **options) -> dict:
-    """Accuracy of a mesh against an implicit shape: the ``dsreg eval --json`` content.
+def evaluate(mesh, shape: str = None, h=None, **options) -> dict:
+    """Accuracy of a mesh against an implicit shape or a volume file: the ``dsreg eval --json`` content.
 
     Parameters
     ----------
     mesh : Mesh, str or os.PathLike
-        Any triangle or quad mesh (a path is read with read_mesh), in the shape's frame.
-    shape : str
-        As for digitize, or "plane" (the tilted half-space n·p <= d in [-box, box]^3).
+        Any triangle or quad mesh (a path is read with read_mesh), in the shape's frame (or, with
+        voxel_coordinates=True, in the voxel frame of digitize(shape, h)). Its face_normals, if any
+        (the field u of a regularized mesh), are the field the folded faces are counted against.
+    shape : str, optional
+        As for digitize, or "plane" (the tilted half-space n·p <= d in [-box, box]^3). Without
+        it, volume= gives the truth.
     h : float, optional
         Grid step: distances are also given in units of h ("vertex_distance_h"), and the voxel
         classification uses digitize(shape, h) (default 1/64 of the shape's extent).
     **options
-        box, plane_normal, plane_offset, wall_margin, volume_cells: the flags of ``dsreg eval``.
+        box, plane_normal, plane_offset, wall_margin, volume_cells, voxel_coordinates,
+        face_errors (a CSV path), volume (a volume file instead of shape), min, max: the flags of
+        ``dsreg eval``.
 
     Returns
     -------
     dict
         vertex_distance and normal_angle_deg (mean, l2, linf, p95; physical units and degrees),
-        mesh_volume, shape_volume, relative_volume_error, voxel_classification,
-        triangle_min_angle_deg, counts.
+        mesh_volume, shape_volume, relative_volume_error, voxel_classification (all, object and
+        boundary voxels), triangle_min_angle_deg, validity, counts; with volume=, only
+        voxel_classification and validity.
     """
     if not isinstance(mesh, Mesh):
         mesh = read_mesh(mesh)
     args = _flag_arguments("evaluate", _EVALUATION_FLAGS, options, excluded=EXCLUDED_EVALUATION_FLAGS)
-    args = [f"--shape={shape}"] + ([f"--h={float(h)!r}"] if h is not None else []) + args
-    vertices, faces, _, _ = mesh._arrays()
-    return _json.loads(_dsreg.evaluate(vertices, faces, args))
+    args = (
+        ([f"--shape={shape}"] if shape is not None else [])
+        + ([f"--h={float(h)!r}"] if h is not None else [])
+        + args
+    )
+    vertices, faces, face_normals, _ = mesh._arrays()
+    return _json.loads(_dsreg.evaluate(vertices, faces, face_normals, args))
 
 
 def read_mesh(path) -> Mesh:

@@ -220,11 +220,12 @@ py::tuple digitize(const std::vector<std::string>& args) {
                           affine);
 }
 
-/// The `dsreg eval --json` object (as JSON text) of a mesh against the flags' shape.
-std::string evaluate(PointMatrix vertices, FaceMatrix faces, const std::vector<std::string>& args) {
+/// The `dsreg eval --json` object (as JSON text) of a mesh (with its face field, if any: the
+/// folded faces) against the flags' shape or volume.
+std::string evaluate(PointMatrix vertices, FaceMatrix faces, PointMatrix face_normals, const std::vector<std::string>& args) {
     Evaluate job;
     parse_flags(job.app, args);
-    const PolygonMesh mesh = polygon_mesh(std::move(vertices), std::move(faces), {}, {});
+    const PolygonMesh mesh = polygon_mesh(std::move(vertices), std::move(faces), std::move(face_normals), {});
     py::gil_scoped_release release;
     const EvaluationRun run = run_evaluation(mesh, "mesh", job.request);
     return evaluation_report(run, "").dump();
@@ -291,7 +292,7 @@ PYBIND11_MODULE(_dsreg, m) {
           py::arg("spacing"), py::arg("origin"), py::arg("progress"));
     m.def("read_volume", &read_volume, py::arg("path"), py::arg("args"), py::arg("spacing"));
     m.def("digitize", &digitize, py::arg("args"));
-    m.def("evaluate", &evaluate, py::arg("vertices"), py::arg("faces"), py::arg("args"));
+    m.def("evaluate", &evaluate, py::arg("vertices"), py::arg("faces"), py::arg("face_normals"), py::arg("args"));
     m.def("read_mesh", &read_mesh_file, py::arg("path"));
     m.def("write_mesh", &write_mesh_file, py::arg("path"), py::arg("vertices"), py::arg("faces"),
           py::arg("face_normals"), py::arg("vertex_scalars"), py::arg("coordinate_system"));

@@ -25,11 +25,11 @@ void check_mesh(const PolygonMesh& mesh) {
 
 /// Indices of the vertices used by some face.
 std::vector<std::int64_t> referenced_vertices(const PolygonMesh& mesh) {
-    std::vector<std::uint8_t> used(std::size_t(mesh.vertices.rows()), 0);
+    Eigen::Array<bool, Eigen::Dynamic, 1> used = Eigen::Array<bool, Eigen::Dynamic, 1>::Zero(mesh.vertices.rows());
     for (Eigen::Index f = 0; f < mesh.faces.rows(); ++f)
-        for (Eigen::Index k = 0; k < mesh.faces.cols(); ++k) used[std::size_t(mesh.faces(f, k))] = 1;
+        for (Eigen::Index k = 0; k < mesh.faces.cols(); ++k) used[mesh.faces(f, k)] = true;
     std::vector<std::int64_t> indices;
-    for (std::size_t i = 0; i < used.size(); ++i)
+    for (Eigen::Index i = 0; i < used.size(); ++i)
         if (used[i]) indices.push_back(std::int64_t(i));
     return indices;
 }
@@ -71,6 +71,9 @@ void evaluate_face_normals(const PolygonMesh& mesh, const ImplicitShape& shape, 
         }
         angles[std::size_t(f)] = angle_degrees(n, truth);
     });
+    result.face_angle_deg = angles;
+    for (double& a : result.face_angle_deg)
+        if (a < 0) a = std::numeric_limits<double>::quiet_NaN();
     std::vector<double> evaluated;
     for (double a : angles) {
         if (a == outside_region) result.faces_outside_region += 1;
@@ -81,7 +84,43 @@ void evaluate_face_normals(const PolygonMesh& mesh, const ImplicitShape& shape, 
     result.normal_angle_deg = error_stats(std::move(evaluated));
 }
 
+/// Whether voxel (i,j,k) of `volume` has a 6-neighbour of the other kind (outside the grid is
+/// background).
+bool next_to_surface(const BinaryVolume& volume, std::int64_t i, std::int64_t j, std::int64_t k) {
+    const bool inside = volume.inside(i, j, k);
+    static constexpr int steps[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (const auto& d : steps)
+        if (volume.inside(i + d[0], j + d[1], k + d[2]) != inside) return true;
+    return false;
+}
+
 }  // namespace
+
+VoxelClassification classify_voxel_centres(const PolygonMesh& mesh, const BinaryVolume& volume) {
+    check_mesh(mesh);
+    const FaceMatrix triangles = mesh_triangles(mesh.vertices, mesh.faces);
+    const std::vector<std::uint8_t> inside = voxel_centres_inside(mesh.vertices, triangles, volume.grid);
+    const Index3& d = volume.grid.dims;
+    VoxelClassification c;
+    c.total = volume.grid.voxel_count();
+    for (std::int64_t k = 0; k < d[2]; ++k)
+        for (std::int64_t j = 0; j < d[1]; ++j)
+            for (std::int64_t i = 0; i < d[0]; ++i) {
+                const std::size_t v = std::size_t(volume.grid.linear_index(i, j, k));
+                const bool object = volume.mask[v] != 0;
+                const int right = (inside[v] != 0) == object ? 1 : 0;
+                c.correct += right;
+                if (object) {
+                    c.object_total += 1;
+                    c.object_correct += right;
+                }
+                if (next_to_surface(volume, i, j, k)) {
+                    c.boundary_total += 1;
+                    c.boundary_correct += right;
+                }
+            }
+    return c;
+}
 
 bool in_evaluation_region(const ImplicitShape& shape, const Eigen::Vector3d& p, double wall_margin) {
     for (int a = 0; a < 3; ++a)
@@ -115,12 +154,8 @@ MeshEvaluation evaluate_mesh(const PolygonMesh& mesh, const ImplicitShape& shape
                                        : std::numeric_limits<double>::quiet_NaN();
 
     if (options.grid_step > 0) {
-        const BinaryVolume digitization = digitize(shape, options.grid_step);
-        const std::vector<std::uint8_t> inside = voxel_centres_inside(mesh.vertices, triangles, digitization.grid);
         result.has_voxel_classification = true;
-        result.voxels.total = digitization.grid.voxel_count();
-        for (std::size_t v = 0; v < inside.size(); ++v)
-            result.voxels.correct += (inside[v] != 0) == (digitization.mask[v] != 0) ? 1 : 0;
+        result.voxels = classify_voxel_centres(mesh, digitize(shape, options.grid_step));
     }
 
     const std::vector<double> min_angles = triangle_min_angles(mesh.vertices, triangles);

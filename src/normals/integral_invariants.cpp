@@ -13,23 +13,14 @@
 
 #include "dsreg/error.hpp"
 #include "dsreg/normals.hpp"
+#include "integral_invariant_sums.hpp"
 
 namespace dsreg {
 
-namespace {
+namespace detail {
 
-/// The labelled voxels of each row (j,k) as runs [first, last] of consecutive x indices with one
-/// label: the object of a binary volume (label 1), or every non-background label of a label map,
-/// so that one pass over the volume serves the indicators of all labels.
-struct RowRuns {
-    std::vector<std::int64_t> row_first;  ///< size ny·nz + 1, into `runs`
-    std::vector<std::array<std::int32_t, 2>> runs;
-    std::vector<std::uint32_t> labels;  ///< label of each run
-};
-
-/// `label_at(row, i)`: the label of voxel i of a row (0 = background).
-template <class LabelAt>
-RowRuns build_row_runs(const Index3& d, LabelAt label_at) {
+RowRuns build_row_runs(const VoxelLabels& volume) {
+    const Index3& d = volume.grid().dims;
     const std::int64_t rows = d[1] * d[2];
     std::vector<std::vector<std::array<std::int32_t, 2>>> per_row(static_cast<std::size_t>(rows));
     std::vector<std::vector<std::uint32_t>> per_row_labels(static_cast<std::size_t>(rows));
@@ -37,11 +28,12 @@ RowRuns build_row_runs(const Index3& d, LabelAt label_at) {
     for (std::int64_t row = 0; row < rows; ++row) {
         auto& out = per_row[static_cast<std::size_t>(row)];
         auto& out_labels = per_row_labels[static_cast<std::size_t>(row)];
+        const std::int64_t first = row * d[0];
         for (std::int64_t i = 0; i < d[0]; ++i) {
-            const std::uint32_t label = label_at(row, i);
+            const std::uint32_t label = volume.at_linear(first + i);
             if (label == 0) continue;
             std::int64_t last = i;
-            while (last + 1 < d[0] && label_at(row, last + 1) == label) ++last;
+            while (last + 1 < d[0] && volume.at_linear(first + last + 1) == label) ++last;
             out.push_back({std::int32_t(i), std::int32_t(last)});
             out_labels.push_back(label);
             i = last;
@@ -60,19 +52,14 @@ RowRuns build_row_runs(const Index3& d, LabelAt label_at) {
     return result;
 }
 
-RowRuns build_row_runs(const BinaryVolume& volume) {
-    const std::uint8_t* mask = volume.mask.data();
-    const std::int64_t nx = volume.grid.dims[0];
-    return build_row_runs(volume.grid.dims, [=](std::int64_t row, std::int64_t i) {
-        return mask[row * nx + i] != 0 ? 1u : 0u;
-    });
-}
+}  // namespace detail
 
-RowRuns build_row_runs(const LabelVolume& volume) {
-    const std::uint32_t* labels = volume.labels.data();
-    const std::int64_t nx = volume.grid.dims[0];
-    return build_row_runs(volume.grid.dims, [=](std::int64_t row, std::int64_t i) { return labels[row * nx + i]; });
-}
+namespace {
+
+using detail::RowRuns;
+using detail::RowSums;
+using detail::Stencil;
+using detail::StencilRow;
 
 /// The kernel weight of a voxel centre at squared distance d2 (in units of r²) from the ball
 /// centre, d2 ≤ 1.
@@ -81,23 +68,6 @@ double kernel_weight(IntegralInvariantKernel kernel, double d2) {
     const double q = 1.0 - d2;  // biweight (1 − |x−c|²/r²)²: continuous, zero on the sphere
     return q * q;
 }
-
-/// Weighted sums over a prefix of a stencil row: Σ w, Σ w·t, Σ w·t².
-struct RowSums {
-    double w = 0, wt = 0, wtt = 0;
-};
-
-/// One row of a ball stencil: offsets (dj, dk), the x offsets t ∈ [t_lo, t_hi] inside the ball,
-/// and `prefix` such that prefix[i] sums t_lo … t_lo + i − 1 (t_hi − t_lo + 2 entries).
-struct StencilRow {
-    std::int32_t dj, dk, t_lo, t_hi;
-    std::int64_t prefix;  ///< index of the row's first entry in Stencil::prefix_sums
-};
-
-struct Stencil {
-    std::vector<StencilRow> rows;
-    std::vector<RowSums> prefix_sums;
-};
 
 /// Rows of lattice offsets whose voxel centre lies in B_r(c) for a surfel of direction
 /// (axis, sign), c being offset by sign·s_axis/2 along the axis from its voxel's centre, with
@@ -225,32 +195,45 @@ IntegralInvariantKernel parse_integral_invariant_kernel(const std::string& name)
     throw Error("unknown integral-invariant kernel '" + name + "' (expected ball or biweight)");
 }
 
+namespace detail {
+
+IntegralInvariantBall::IntegralInvariantBall(const Eigen::Vector3d& spacing, double radius, IntegralInvariantKernel kernel)
+    : spacing_(spacing), radius_(radius) {
+    if (!(radius > 0) || !std::isfinite(radius))
+        throw Error("integral invariant radius must be positive and finite (got " + std::to_string(radius) + ")");
+    constexpr double max_table_entries = double(1 << 25);  // 768 MiB of row sums
+    if (stencil_table_entries(spacing, radius) > max_table_entries)
+        throw Error("integral invariant radius " + std::to_string(radius) + " spans " +
+                    std::to_string(std::lround((radius / spacing.array()).maxCoeff())) +
+                    " voxels: its ball tables would exceed 768 MiB (use a radius below about 100 voxels)");
+    for (int axis = 0; axis < 3; ++axis)
+        for (int side = 0; side < 2; ++side)
+            stencils_[axis][side] = ball_stencil(spacing, axis, side ? 1 : -1, radius, kernel);
+}
+
+Eigen::Vector3d IntegralInvariantBall::normal(const Index3& dims, const RowRuns& rows, const Surfel& s,
+                                              std::uint32_t label) const {
+    const LatticeMoments m = ball_moments(dims, rows, s, label, stencils_[s.axis][s.sign > 0 ? 1 : 0]);
+    return normal_from_moments(m, s, spacing_);
+}
+
+std::uint32_t inner_label(const DigitalSurface& surface, std::int64_t f) {
+    return surface.face_labels.empty() ? 1u : surface.face_labels[std::size_t(f)].inner;
+}
+
+}  // namespace detail
+
 namespace {
 
 /// The field for one radius, from row runs built once by the caller: each face gets the normal
 /// of the indicator of its inner label (the object of a binary volume).
 PointMatrix normals_from_runs(const VoxelGrid& grid, const RowRuns& rows, const DigitalSurface& surface,
                               double radius, IntegralInvariantKernel kernel) {
-    if (!(radius > 0) || !std::isfinite(radius))
-        throw Error("integral invariant radius must be positive and finite (got " + std::to_string(radius) + ")");
-    const Eigen::Vector3d& spacing = grid.spacing;
-    constexpr double max_table_entries = double(1 << 25);  // 768 MiB of row sums
-    if (stencil_table_entries(spacing, radius) > max_table_entries)
-        throw Error("integral invariant radius " + std::to_string(radius) + " spans " +
-                    std::to_string(std::lround((radius / spacing.array()).maxCoeff())) +
-                    " voxels: its ball tables would exceed 768 MiB (use a radius below about 100 voxels)");
-    Stencil stencils[3][2];
-    for (int axis = 0; axis < 3; ++axis)
-        for (int side = 0; side < 2; ++side)
-            stencils[axis][side] = ball_stencil(spacing, axis, side ? 1 : -1, radius, kernel);
+    const detail::IntegralInvariantBall ball(grid.spacing, radius, kernel);
     PointMatrix u(surface.face_count(), 3);
 #pragma omp parallel for schedule(dynamic, 256)
-    for (std::int64_t f = 0; f < surface.face_count(); ++f) {
-        const Surfel& s = surface.surfels[std::size_t(f)];
-        const std::uint32_t label = surface.face_labels.empty() ? 1u : surface.face_labels[std::size_t(f)].inner;
-        const LatticeMoments m = ball_moments(grid.dims, rows, s, label, stencils[s.axis][s.sign > 0 ? 1 : 0]);
-        u.row(f) = normal_from_moments(m, s, spacing).transpose();
-    }
+    for (std::int64_t f = 0; f < surface.face_count(); ++f)
+        u.row(f) = ball.normal(grid.dims, rows, surface.surfels[std::size_t(f)], detail::inner_label(surface, f)).transpose();
     return u;
 }
 
@@ -328,7 +311,7 @@ std::vector<char> faces_near_junctions(const LabelVolume& volume, const DigitalS
         throw Error("junction radius must be positive and finite (got " + std::to_string(radius) + ")");
     std::vector<char> near(static_cast<std::size_t>(surface.face_count()), 0);
     if (volume.label_count() <= 2) return near;  // a binary label map has no third label
-    const RowRuns rows = build_row_runs(volume);
+    const RowRuns rows = detail::build_row_runs(volume);
     Stencil stencils[3][2];
     for (int axis = 0; axis < 3; ++axis)
         for (int side = 0; side < 2; ++side)
@@ -345,24 +328,24 @@ std::vector<char> faces_near_junctions(const LabelVolume& volume, const DigitalS
 
 PointMatrix integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface, double radius,
                                        IntegralInvariantKernel kernel) {
-    return normals_from_runs(volume.grid, build_row_runs(volume), surface, radius, kernel);
+    return normals_from_runs(volume.grid, detail::build_row_runs(volume), surface, radius, kernel);
 }
 
 PointMatrix integral_invariant_normals(const LabelVolume& volume, const DigitalSurface& surface, double radius,
                                        IntegralInvariantKernel kernel) {
     check_surface_labels(surface);
-    return normals_from_runs(volume.grid, build_row_runs(volume), surface, radius, kernel);  // one pass, all labels
+    return normals_from_runs(volume.grid, detail::build_row_runs(volume), surface, radius, kernel);  // one pass, all labels
 }
 
 PointMatrix extrapolated_integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface,
                                                     double radius, IntegralInvariantKernel kernel) {
-    return extrapolated_from_runs(volume.grid, build_row_runs(volume), surface, radius, kernel);  // runs once for both radii
+    return extrapolated_from_runs(volume.grid, detail::build_row_runs(volume), surface, radius, kernel);  // runs once for both radii
 }
 
 PointMatrix extrapolated_integral_invariant_normals(const LabelVolume& volume, const DigitalSurface& surface,
                                                     double radius, IntegralInvariantKernel kernel) {
     check_surface_labels(surface);
-    return extrapolated_from_runs(volume.grid, build_row_runs(volume), surface, radius, kernel);
+    return extrapolated_from_runs(volume.grid, detail::build_row_runs(volume), surface, radius, kernel);
 }
 
 }  // namespace dsreg

@@ -51,17 +51,29 @@ void check_choices(const NormalFieldOptions& o) {
     parse_integral_invariant_kernel(o.ii_kernel);
 }
 
-/// Integral invariants of each face's inner label on a label map's complex, and near junctions
-/// the convolved trivial normals of the face's own interface (docs/multi-label.md).
-PointMatrix label_map_field(const LoadedVolume& loaded, const DigitalSurface& surface, double radius,
-                            IntegralInvariantKernel kernel, bool extrapolate, NormalField& field) {
-    const LabelVolume& labels = *loaded.labels;
-    PointMatrix u = extrapolate ? extrapolated_integral_invariant_normals(labels, surface, radius, kernel)
-                                : integral_invariant_normals(labels, surface, radius, kernel);
-    field.interface_normal_faces = use_interface_normals_near_junctions(labels, surface, radius, u);
+/// On a label map's complex, the convolved trivial normals of the face's own interface near
+/// junctions (within `radius`; docs/multi-label.md) in place of the integral invariants `u`.
+void use_interface_normals(const LoadedVolume& loaded, const DigitalSurface& surface, double radius, PointMatrix& u,
+                           NormalField& field) {
+    if (!loaded.labels) return;
+    field.interface_normal_faces = use_interface_normals_near_junctions(*loaded.labels, surface, radius, u);
     if (field.interface_normal_faces > 0)
         field.description += "; interface normals on the " + std::to_string(field.interface_normal_faces) +
                              " faces near junctions";
+}
+
+/// The adaptive field (adaptive_normals.hpp) of the object or of each face's inner label.
+PointMatrix adaptive_field(const NormalFieldOptions& o, const LoadedVolume& loaded, const DigitalSurface& surface,
+                           NormalField& field) {
+    const AdaptiveNormalOptions adaptive = default_adaptive_options(o, loaded);
+    field.ii_kernel = o.ii_kernel;
+    field.adaptive = adaptive_integral_invariant_normals(loaded.voxel_labels(), surface, adaptive);
+    const Eigen::VectorXd& r = field.adaptive->radius;
+    field.description = "adaptive integral invariants (" + o.ii_kernel + " kernel), r = " + format("%g", r.minCoeff()) +
+                        " to " + format("%g", r.maxCoeff()) + " (mean " + format("%.3g", r.mean()) + "), " +
+                        format("%.1f", 100.0 * field.adaptive->extrapolated.mean()) + " % extrapolated";
+    PointMatrix u = field.adaptive->normals;
+    use_interface_normals(loaded, surface, default_field_radius(o, "ii", loaded), u, field);
     return u;
 }
 
@@ -74,6 +86,7 @@ PointMatrix estimate_input_field(const NormalFieldOptions& o, const LoadedVolume
         field.description = "file " + o.file;
         return read_normals_file(o.file, surface);
     }
+    if (kind == "ii" && !o.radius && !o.ii_extrapolate) return adaptive_field(o, loaded, surface, field);
     if (kind == "ii" || kind == "ctrivial") {
         field.radius = o.radius ? *o.radius : default_field_radius(o, kind, loaded);
         const std::string r = ", r = " + format("%g", *field.radius);
@@ -86,9 +99,15 @@ PointMatrix estimate_input_field(const NormalFieldOptions& o, const LoadedVolume
         const IntegralInvariantKernel kernel = parse_integral_invariant_kernel(o.ii_kernel);
         field.description = "integral invariants (" + o.ii_kernel + " kernel)" +
                             (o.ii_extrapolate ? ", extrapolated from r and r/sqrt(2)" : "") + r;
-        if (loaded.labels) return label_map_field(loaded, surface, *field.radius, kernel, o.ii_extrapolate, field);
-        if (o.ii_extrapolate) return extrapolated_integral_invariant_normals(loaded.volume, surface, *field.radius, kernel);
-        return integral_invariant_normals(loaded.volume, surface, *field.radius, kernel);
+        PointMatrix u;
+        if (loaded.labels)
+            u = o.ii_extrapolate ? extrapolated_integral_invariant_normals(*loaded.labels, surface, *field.radius, kernel)
+                                 : integral_invariant_normals(*loaded.labels, surface, *field.radius, kernel);
+        else
+            u = o.ii_extrapolate ? extrapolated_integral_invariant_normals(loaded.volume, surface, *field.radius, kernel)
+                                 : integral_invariant_normals(loaded.volume, surface, *field.radius, kernel);
+        use_interface_normals(loaded, surface, *field.radius, u, field);
+        return u;
     }
     if (kind == "exact") {
         field.description = "exact normals";
@@ -116,6 +135,22 @@ std::string at_stage_detail(const AmbrosioTortorelliResult& r, double threshold)
 }
 
 }  // namespace
+
+AdaptiveNormalOptions default_adaptive_options(const NormalFieldOptions& o, const LoadedVolume& loaded) {
+    const double voxel = loaded.volume.grid.spacing.maxCoeff();
+    AdaptiveNormalOptions adaptive;
+    adaptive.max_radius = o.max_radius ? *o.max_radius : 14.0 * voxel;  // docs/accuracy.md: 14 beats 7 and 10
+    // Every voxel is in a ball of its own kind of radius the smallest spacing: 2 of it is never
+    // above the local thickness.
+    adaptive.min_radius = std::min(2.0 * loaded.volume.grid.spacing.minCoeff(), adaptive.max_radius);
+    adaptive.reach_factor = 1.5;
+    adaptive.extrapolation_min_radius = 6.0 * voxel;
+    adaptive.reach_cap = 13.0 * voxel;  // the default --alpha-reach (12 voxels) needs the reach up to there
+    adaptive.smoothing_steps = 4;       // on thin parts, whose small balls are noisy
+    adaptive.smoothing_below = 5.0 * voxel;
+    adaptive.kernel = parse_integral_invariant_kernel(o.ii_kernel);
+    return adaptive;
+}
 
 double default_field_radius(const NormalFieldOptions& o, const std::string& kind, const LoadedVolume& loaded) {
     const bool ii = kind == "ii";
@@ -157,6 +192,11 @@ void check_normal_field_options(const NormalFieldOptions& o, bool input_is_shape
     check_choices(o);
     check_combinations(o, input_is_shape);
     if (o.radius && (!(*o.radius > 0) || !std::isfinite(*o.radius))) throw Error("--radius must be positive");
+    if (o.max_radius && (!(*o.max_radius > 0) || !std::isfinite(*o.max_radius)))
+        throw Error("--ii-max-radius must be positive");
+    if (o.max_radius && (o.radius || o.ii_extrapolate || input_kind(o) != "ii"))
+        throw Error("--ii-max-radius applies to the adaptive integral invariants only (not with --radius, "
+                    "--ii-extrapolate or another field)");
     if (field_kind(o) == "at") {
         validate_at_parameters(o.at);
         if (!(o.feature_threshold > 0 && o.feature_threshold <= 1))

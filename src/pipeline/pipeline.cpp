@@ -12,6 +12,7 @@
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
 #include "dsreg/grid_placement.hpp"
+#include "dsreg/local_reach.hpp"
 #include "dsreg/mesh_io.hpp"
 #include "dsreg/normals_file.hpp"
 #include "dsreg/text.hpp"
@@ -39,6 +40,18 @@ void check_weight_flags(const PipelineOptions& o) {
     check("--beta", o.beta, true);
     check("--gamma", o.gamma, true);
     validate_weights(global_weights(o), 0, 0);
+}
+
+/// The faces' reach for the thin-part data weights (empty when --alpha-reach 0), measured along
+/// the field used, whatever made it: so a field read back from --export-normals gives the same
+/// weights, and so the same mesh (the adaptive field's own reach follows its first field).
+Eigen::VectorXd thin_part_reach(const RegularizationExtensions& o, const VoxelLabels& volume,
+                                const DigitalSurface& surface, const NormalField& field) {
+    const double reference = alpha_reach(o, volume.grid());
+    if (reference <= 0) return {};
+    const double cap = reference + volume.grid().spacing.maxCoeff();
+    SurfelReach reach = surfel_reach(volume, surface, field.normals, cap);
+    return max_over_rings(surface, reach.smallest(), AdaptiveNormalOptions{}.reach_rings);
 }
 
 std::string component_text(std::int64_t count) {
@@ -143,7 +156,9 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
 
     clock.start("regularize");
     result.weights = global_weights(o);
-    apply_regularization_extensions(o.extensions, result.surface, result.field.normals, result.weights);
+    apply_regularization_extensions(o.extensions, result.surface, result.field.normals,
+                                    thin_part_reach(o.extensions, loaded.voxel_labels(), result.surface, result.field),
+                                    result.weights);
     SolverOptions solver;
     solver.kind = o.solver;
     solver.max_error_voxels = o.max_error_voxels;  // iterative solvers: within this of the exact answer
@@ -448,6 +463,19 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
                             {"ii_extrapolated", field.ii_extrapolated},
                             {"solver", solve.solver}, {"max_error_voxels", o.max_error_voxels},
                             {"triangulate", outputs.triangulate}};
+    if (field.adaptive) {
+        const AdaptiveNormalField& a = *field.adaptive;
+        report["adaptive_ii"] = {{"radius_min", a.radius.minCoeff()},
+                                 {"radius_mean", a.radius.mean()},
+                                 {"radius_max", a.radius.maxCoeff()},
+                                 {"extrapolated_share", a.extrapolated.mean()},
+                                 {"reach_min", a.reach.smallest().minCoeff()},
+                                 {"reach_cap", a.reach_cap}};
+    }
+    if (r.weights.vertex_alpha.size() > 0)
+        report["thin_part_alpha"] = {{"reference_reach", alpha_reach(o.extensions, r.grid)},
+                                     {"multiplier_max", r.weights.vertex_alpha.maxCoeff()},
+                                     {"vertices_above_one", (r.weights.vertex_alpha.array() > 1.0).count()}};
     if (field.at) report["at"] = at_report(o.normals, field, surface);
     report["solve"] = {{"relative_residual", solve.relative_residual},
                        {"error_bound", solve.error_bound},

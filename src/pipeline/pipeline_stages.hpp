@@ -27,15 +27,21 @@ void write_feature_lines(const std::string& path, const NormalFieldOptions& opti
 /// The report's "at" object: parameters, per-ε rounds, change of v, energy, time, solves.
 nlohmann::json at_report(const NormalFieldOptions& options, const NormalField& field, const DigitalSurface& surface);
 
+/// The reference reach of --alpha-reach in physical units (its default: 12 voxels); 0 = off.
+double alpha_reach(const RegularizationExtensions& options, const VoxelGrid& grid);
+
 /// The report's energy object: the three terms of eq. (1) without their weights, and the total.
 nlohmann::json energy_json(const EnergyTerms& terms, const RegularizationWeights& weights);
 
 /// Fills the metric (W0, W2) and the local multipliers of `weights` for this surface and normal
-/// field, reading the maps or files, then validates the weights. Throws dsreg::Error.
+/// field, reading the maps or files and, given the faces' reach (empty: none), the thin-part
+/// data weights; then validates the weights. Throws dsreg::Error.
 void apply_regularization_extensions(const RegularizationExtensions& options, const DigitalSurface& surface,
-                                     const PointMatrix& normals, RegularizationWeights& weights);
+                                     const PointMatrix& normals, const Eigen::VectorXd& face_reach,
+                                     RegularizationWeights& weights);
 
-/// regularize() with `solver`, or with --clamp regularize_clamped() with the same solver choice.
+/// regularize() with `solver` then correct_shrink() (--shrink-correction; the energy after is that
+/// of the corrected positions), or with --clamp regularize_clamped() with the same solver choice.
 /// `report` receives the JSON fields of the extensions: "metric",
 /// "local_weights" and, with --clamp, "clamp" (KKT residual, constraint violation, iterations,
 /// unclamped comparison, voxel-centre classification of `volume`).

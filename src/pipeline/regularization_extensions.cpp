@@ -3,8 +3,10 @@
 
 #include "dsreg/clamped_regularization.hpp"
 #include "dsreg/error.hpp"
+#include "dsreg/label_surface.hpp"
 #include "dsreg/local_weights.hpp"
 #include "dsreg/regularization_metrics.hpp"
+#include "dsreg/shrink_correction.hpp"
 #include "dsreg/volume_io.hpp"
 #include "pipeline_stages.hpp"
 
@@ -105,11 +107,20 @@ nlohmann::json clamp_json(const RegularizationExtensions& o, const ClampedRegula
 
 }  // namespace
 
+double alpha_reach(const RegularizationExtensions& o, const VoxelGrid& grid) {
+    return o.alpha_reach ? *o.alpha_reach : 12.0 * grid.spacing.maxCoeff();
+}
+
 nlohmann::json energy_json(const EnergyTerms& e, const RegularizationWeights& w) {
     return {{"data", e.data}, {"alignment", e.alignment}, {"fairness", e.fairness}, {"total", e.total(w)}};
 }
 
 void check_regularization_extensions(const RegularizationExtensions& o) {
+    if (o.alpha_reach && (!(*o.alpha_reach >= 0) || !std::isfinite(*o.alpha_reach)))
+        throw Error("--alpha-reach must be zero (off) or positive");
+    if (o.shrink_correction && *o.shrink_correction < 0) throw Error("--shrink-correction must be 0 (off) or positive");
+    if (o.shrink_correction && *o.shrink_correction > 0 && o.clamp)
+        throw Error("--shrink-correction moves vertices out of the --clamp boxes: do not combine them");
     if (!(o.clamp_tolerance > 0) || !std::isfinite(o.clamp_tolerance)) throw Error("--clamp-tolerance must be positive");
     if (!(o.clamp_half_width > 0) || !std::isfinite(o.clamp_half_width)) throw Error("--clamp-half-width must be positive");
     parse_metric_kind(o.metric);
@@ -119,11 +130,16 @@ void check_regularization_extensions(const RegularizationExtensions& o) {
 }
 
 void apply_regularization_extensions(const RegularizationExtensions& o, const DigitalSurface& surface,
-                                     const PointMatrix& normals, RegularizationWeights& weights) {
+                                     const PointMatrix& normals, const Eigen::VectorXd& face_reach,
+                                     RegularizationWeights& weights) {
     check_regularization_extensions(o);
     apply_metric(parse_metric_kind(o.metric), surface, normals, weights);
     for (const WeightSource& w : weight_sources(o))
         if (!w.map.empty() || !w.file.empty()) multiplier_slot(weights, w.name) = read_multipliers(w, o, surface);
+    if (face_reach.size() > 0) {
+        const Eigen::VectorXd thin = thin_part_alpha(surface, face_reach, alpha_reach(o, surface.grid));
+        weights.vertex_alpha = weights.vertex_alpha.size() > 0 ? Eigen::VectorXd(weights.vertex_alpha.cwiseProduct(thin)) : thin;
+    }
     validate_weights(weights, surface.vertex_count(), surface.face_count());
 }
 
@@ -132,7 +148,21 @@ RegularizationResult run_regularization(const RegularizationExtensions& o, const
                                         const SolverOptions& solver, nlohmann::json& report) {
     report["metric"] = o.metric;
     report["local_weights"] = local_weights_json(o, weights);
-    if (!o.clamp) return regularize(surface, normals, weights, solver);
+    if (!o.clamp) {
+        RegularizationResult result = regularize(surface, normals, weights, solver);
+        const int steps = o.shrink_correction.value_or(40);
+        if (steps == 0) return result;
+        const ShrinkCorrection correction = correct_shrink(surface, result.positions, normals, steps);
+        const EnergyTerms solved = result.energy_after;
+        result.positions = correction.positions;
+        result.energy_after = regularization_energy(result.positions, surface.vertices, surface.quads,
+                                                    fairness_links(surface), normals, weights);
+        report["shrink_correction"] = {{"steps", steps},
+                                       {"mean_shift", correction.mean_shift},
+                                       {"max_shift", correction.max_shift},
+                                       {"energy_of_the_solve", solved.total(weights)}};
+        return result;
+    }
 
     ClampOptions clamp;
     clamp.qp.tolerance = o.clamp_tolerance;

@@ -1,6 +1,7 @@
 // dsreg — local multipliers from a scalar volume (sampled at the vertices) or a text file.
 #include "dsreg/local_weights.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -54,6 +55,24 @@ Eigen::VectorXd sample_at_vertices(const ScalarVolume& volume, const DigitalSurf
         samples[v] = mean_around_pointel(volume, surface.vertex_pointels(v, 0), surface.vertex_pointels(v, 1),
                                          surface.vertex_pointels(v, 2));
     return samples;
+}
+
+Eigen::VectorXd thin_part_alpha(const DigitalSurface& surface, const Eigen::VectorXd& face_reach, double reference) {
+    if (!(reference > 0) || !std::isfinite(reference))
+        throw Error("thin_part_alpha: the reference reach must be positive and finite");
+    if (face_reach.size() != surface.face_count())
+        throw Error("thin_part_alpha: one reach per face expected (got " + std::to_string(face_reach.size()) + " for " +
+                    std::to_string(surface.face_count()) + " faces)");
+    Eigen::VectorXd vertex_reach = Eigen::VectorXd::Constant(surface.vertex_count(), reference);
+    for (std::int64_t f = 0; f < surface.face_count(); ++f)
+        for (int k = 0; k < 4; ++k) {
+            double& r = vertex_reach[surface.quads(f, k)];
+            r = std::min(r, face_reach[f]);
+        }
+    return vertex_reach.unaryExpr([reference](double r) {
+        const double ratio = reference / r;
+        return ratio * ratio;
+    });
 }
 
 Eigen::VectorXd face_means(const FaceMatrix& faces, const Eigen::VectorXd& vertex_values) {

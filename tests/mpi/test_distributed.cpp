@@ -6,6 +6,7 @@
 
 #include <filesystem>
 
+#include "dsreg/block_pipeline.hpp"
 #include "dsreg/distributed.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/mesh_validity.hpp"
@@ -35,7 +36,9 @@ void expect_equal_to_serial(const VolumeSource& source, const PipelineOptions& o
     distributed_options.validity = ValidityMode::Off;
     const PipelineResult distributed = run_distributed_pipeline(MPI_COMM_WORLD, source, distributed_options);
     if (world_rank() != 0) return;
-    PipelineOptions serial_options = options;
+    // The whole-volume run of the options block-wise runs can do (fixed radius, no thin-part
+    // weights nor shrink correction: plan_block_run).
+    PipelineOptions serial_options = plan_block_run(source, options, "dsreg-mpi").options;
     serial_options.solver = SolverKind::Cholmod;
     serial_options.validity = ValidityMode::Off;
     const PipelineResult serial = run_pipeline(source, serial_options);

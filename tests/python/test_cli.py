@@ -119,6 +119,38 @@ def test_evaluate_is_dsreg_eval(cli, tmp_path):
         dsreg.evaluate(mesh, "goursat", wall_margin=-1.0)
 
 
+def test_evaluate_volume_voxel_coordinates_and_face_errors_are_dsreg_eval(cli, tmp_path):
+    """volume=, min=, voxel_coordinates= and face_errors= are the flags of `dsreg eval`: the same
+    report and the same CSV, through the library's one evaluation."""
+    vol, ply = tmp_path / "g.vol", tmp_path / "g.ply"
+    cli("digitize", "--shape", "goursat", "--h", "0.5", "-o", vol)
+    cli("regularize", vol, "-o", ply, "-q")  # in the voxel frame of the .vol, with the field u
+
+    expected = json.loads(cli("eval", ply, "--volume", vol, "--min", "1", "--json").stdout)
+    report = dsreg.evaluate(ply, volume=vol, min=1)
+    assert report.pop("mesh") is None and expected.pop("mesh") == str(ply)
+    assert report == expected
+    assert report["validity"]["folded_faces"] is not None  # the PLY's face normals are the field
+    assert report["voxel_classification"]["boundary_share"] > 0.9
+
+    cli_csv, py_csv = tmp_path / "cli.csv", tmp_path / "py.csv"
+    expected = json.loads(
+        cli("eval", ply, "--shape", "goursat", "--h", "0.5", "--voxel-coordinates", "--face-errors", cli_csv, "--json").stdout
+    )
+    report = dsreg.evaluate(ply, "goursat", 0.5, voxel_coordinates=True, face_errors=py_csv)
+    assert report["normal_angle_deg"] == pytest.approx(expected["normal_angle_deg"], rel=1e-9)
+    assert report["normal_angle_deg"]["mean"] < 10  # mapped to the shape's frame: close to the truth
+    assert py_csv.read_text() == cli_csv.read_text()
+    rows = np.genfromtxt(py_csv, delimiter=",", names=True)
+    assert len(rows) == len(dsreg.read_mesh(ply).faces)
+    assert np.nanmean(rows["normal_angle_deg"]) == pytest.approx(report["normal_angle_deg"]["mean"], rel=1e-6)
+
+    with pytest.raises(ValueError, match="--min and --max only apply to --volume"):
+        dsreg.evaluate(ply, "goursat", min=1)
+    with pytest.raises(ValueError, match="--volume gives the truth as voxels"):
+        dsreg.evaluate(ply, "goursat", volume=vol)
+
+
 def help_flags(cli, command):
     """The long names of the flags `dsreg COMMAND --help` lists."""
     text = cli(command, "--help").stdout

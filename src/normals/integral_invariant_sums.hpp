@@ -1,0 +1,74 @@
+// dsreg — internal: the integral-invariant sums shared by the fixed-radius and adaptive fields.
+//
+// For a surfel of voxel v with normal sign·e_a, the voxel centres inside the ball B_r(c) of its
+// centre c = centre(v) + sign·(s_a/2)·e_a are, relative to v, the same lattice offsets for every
+// surfel of the same direction; an IntegralInvariantBall holds those offsets once per direction,
+// cut into rows with running sums of the kernel weights, and sums a surfel's ball over the runs
+// of voxels of one label in each row (RowRuns) with two table look-ups per run: O(r²/h²) per surfel.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "dsreg/digital_surface.hpp"
+#include "dsreg/normals.hpp"
+#include "dsreg/volume.hpp"
+
+namespace dsreg::detail {
+
+/// The labelled voxels of each row (j,k) as runs [first, last] of consecutive x indices with one
+/// label: the object of a binary volume (label 1), or every non-background label of a label map,
+/// so that one pass over the volume serves the indicators of all labels.
+struct RowRuns {
+    std::vector<std::int64_t> row_first;  ///< size ny·nz + 1, into `runs`
+    std::vector<std::array<std::int32_t, 2>> runs;
+    std::vector<std::uint32_t> labels;  ///< label index of each run
+};
+
+RowRuns build_row_runs(const VoxelLabels& volume);
+
+/// The label whose indicator gives face f its normal: its inner label (1 on a binary surface).
+std::uint32_t inner_label(const DigitalSurface& surface, std::int64_t f);
+
+/// Weighted sums over a prefix of a stencil row: Σ w, Σ w·t, Σ w·t².
+struct RowSums {
+    double w = 0, wt = 0, wtt = 0;
+};
+
+/// One row of a ball stencil: offsets (dj, dk), the x offsets t ∈ [t_lo, t_hi] inside the ball,
+/// and `prefix` such that prefix[i] sums t_lo … t_lo + i − 1 (t_hi − t_lo + 2 entries).
+struct StencilRow {
+    std::int32_t dj, dk, t_lo, t_hi;
+    std::int64_t prefix;  ///< index of the row's first entry in Stencil::prefix_sums
+};
+
+struct Stencil {
+    std::vector<StencilRow> rows;
+    std::vector<RowSums> prefix_sums;
+};
+
+/// The integral-invariant ball of one radius (physical units) and kernel on a grid's spacing:
+/// its six stencils, one per surfel direction.
+class IntegralInvariantBall {
+public:
+    /// Throws dsreg::Error if radius is not positive and finite, or its tables would exceed
+    /// 768 MiB (about 100 voxels).
+    IntegralInvariantBall(const Eigen::Vector3d& spacing, double radius, IntegralInvariantKernel kernel);
+
+    /// The normal of surfel s: eigenvector of the smallest eigenvalue of the weighted covariance
+    /// of the centres of the voxels of `label` in its ball (rows of a grid of `dims`), oriented
+    /// from their centroid towards the surfel centre (the trivial normal when the ball holds no
+    /// weight).
+    Eigen::Vector3d normal(const Index3& dims, const RowRuns& rows, const Surfel& s, std::uint32_t label) const;
+
+    double radius() const { return radius_; }
+
+private:
+    Eigen::Vector3d spacing_;
+    double radius_;
+    Stencil stencils_[3][2];  ///< [axis][sign > 0]
+};
+
+}  // namespace dsreg::detail

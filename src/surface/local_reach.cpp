@@ -1,0 +1,210 @@
+// The local reach of the object and of the background at each surfel, along rays through the
+// distance maps, and the local thickness at a voxel (include/dsreg/local_reach.hpp).
+#include "dsreg/local_reach.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "dsreg/distance_transform.hpp"
+#include "dsreg/error.hpp"
+
+namespace dsreg {
+
+namespace {
+
+constexpr double kStepsPerVoxel = 16;  // stored distances: 1/16 of the smallest spacing
+
+/// A length in steps of the maps, rounded down. Lengths between voxel centres are often whole
+/// steps (3 voxels: 48), which the round-off of the spacing (a float32 affine) puts on either side
+/// of the integer: a length within 1e-3 step below a whole number counts as that number (the
+/// round-off is below 1e-4 step up to 4000 voxels), so that the reach and every comparison with
+/// it are the same for spacings that differ by round-off.
+std::int64_t length_in_steps(const ReachMaps& maps, double length) {
+    return std::int64_t(std::floor(length / maps.unit + 1e-3));
+}
+
+/// Whether the ball of radius `steps` (stored distance) centred at a voxel centre contains a
+/// point at `length` from it (strictly), both in the maps' steps.
+bool ball_contains(const ReachMaps& maps, std::uint16_t steps, double length) {
+    return length_in_steps(maps, length) < std::int64_t(steps);
+}
+
+/// The grown-grid voxel whose box contains the physical point p, or false outside the grown grid.
+bool voxel_at(const VoxelGrid& grid, const Eigen::Vector3d& p, Index3& voxel) {
+    for (int a = 0; a < 3; ++a) {
+        voxel[std::size_t(a)] = std::int64_t(std::floor((p[a] - grid.origin[a]) / grid.spacing[a] + 0.5));
+        if (voxel[std::size_t(a)] < 0 || voxel[std::size_t(a)] >= grid.dims[std::size_t(a)]) return false;
+    }
+    return true;
+}
+
+/// The label of grown-grid voxel y (0 in the padding).
+std::uint32_t label_at(const VoxelLabels& volume, const ReachMaps& maps, const Index3& y) {
+    return volume.at(y[0] - maps.padding, y[1] - maps.padding, y[2] - maps.padding);
+}
+
+/// The reach along one ray from `from` (local_reach.hpp) through the voxels of `label`, `anchor`
+/// the voxel centre the balls must contain.
+double reach_along(const VoxelLabels& volume, const ReachMaps& maps, std::uint32_t label, const Eigen::Vector3d& from,
+                   const Eigen::Vector3d& direction, const Eigen::Vector3d& anchor) {
+    const double step = 0.5 * maps.grid.spacing.minCoeff();
+    double best = maps.grid.spacing.minCoeff();
+    for (double t = 0.5 * step; t <= maps.cap; t += step) {
+        Index3 y;
+        if (!voxel_at(maps.grid, from + t * direction, y)) break;
+        if (label_at(volume, maps, y) != label) break;
+        const std::uint16_t steps = maps.distance[std::size_t(maps.grid.linear_index(y[0], y[1], y[2]))];
+        if (ball_contains(maps, steps, (maps.grid.voxel_center(y[0], y[1], y[2]) - anchor).norm()))
+            best = std::max(best, maps.unit * steps);
+        if (best >= maps.cap) break;
+    }
+    return std::min(best, maps.cap);
+}
+
+std::uint16_t stored_distance(const ReachMaps& maps, float distance) {
+    const std::int64_t largest = std::numeric_limits<std::uint16_t>::max();
+    return std::uint16_t(std::min(largest, length_in_steps(maps, distance)));
+}
+
+/// Bounding boxes [lo, hi] of the voxels of every label index (index 0 unused); hi < lo where absent.
+std::vector<std::array<Index3, 2>> label_boxes(const VoxelLabels& volume) {
+    const Index3& d = volume.grid().dims;
+    std::vector<std::array<Index3, 2>> boxes;
+    for (std::int64_t k = 0; k < d[2]; ++k)
+        for (std::int64_t j = 0; j < d[1]; ++j)
+            for (std::int64_t i = 0; i < d[0]; ++i) {
+                const std::uint32_t l = volume.at_linear(volume.grid().linear_index(i, j, k));
+                if (l == 0) continue;
+                if (l >= boxes.size()) boxes.resize(l + 1, {Index3{d[0], d[1], d[2]}, Index3{-1, -1, -1}});
+                for (int a = 0; a < 3; ++a) {
+                    const std::int64_t x = a == 0 ? i : a == 1 ? j : k;
+                    boxes[l][0][std::size_t(a)] = std::min(boxes[l][0][std::size_t(a)], x);
+                    boxes[l][1][std::size_t(a)] = std::max(boxes[l][1][std::size_t(a)], x);
+                }
+            }
+    return boxes;
+}
+
+/// D to the other labels on the voxels of label l ≥ 1: the distance transform of its indicator
+/// on its bounding box grown by the padding (clipped to the grid; beyond it, no voxel of l).
+void fill_label_distances(const VoxelLabels& volume, std::uint32_t l, const std::array<Index3, 2>& box, ReachMaps& maps) {
+    BinaryVolume crop;
+    Index3 lo, hi;
+    for (std::size_t a = 0; a < 3; ++a) {
+        lo[a] = std::max<std::int64_t>(0, box[0][a] - maps.padding);
+        hi[a] = std::min<std::int64_t>(volume.grid().dims[a] - 1, box[1][a] + maps.padding);
+        crop.grid.dims[a] = hi[a] - lo[a] + 1;
+    }
+    crop.grid.spacing = volume.grid().spacing;
+    crop.mask.resize(std::size_t(crop.grid.voxel_count()));
+    for (std::int64_t k = 0; k < crop.grid.dims[2]; ++k)
+        for (std::int64_t j = 0; j < crop.grid.dims[1]; ++j)
+            for (std::int64_t i = 0; i < crop.grid.dims[0]; ++i)
+                crop.mask[std::size_t(crop.grid.linear_index(i, j, k))] = volume.at(lo[0] + i, lo[1] + j, lo[2] + k) == l;
+    const std::vector<float> distance = euclidean_distance_transform(crop, DistanceTarget::background);
+    for (std::int64_t k = 0; k < crop.grid.dims[2]; ++k)
+        for (std::int64_t j = 0; j < crop.grid.dims[1]; ++j)
+            for (std::int64_t i = 0; i < crop.grid.dims[0]; ++i) {
+                const std::int64_t c = crop.grid.linear_index(i, j, k);
+                if (!crop.mask[std::size_t(c)]) continue;
+                const std::int64_t g = maps.grid.linear_index(lo[0] + i + maps.padding, lo[1] + j + maps.padding,
+                                                              lo[2] + k + maps.padding);
+                maps.distance[std::size_t(g)] = stored_distance(maps, distance[std::size_t(c)]);
+            }
+}
+
+}  // namespace
+
+ReachMaps reach_maps(const VoxelLabels& volume, double cap) {
+    if (!(cap > 0) || !std::isfinite(cap)) throw Error("reach maps: the cap must be positive and finite");
+    const VoxelGrid& grid = volume.grid();
+    ReachMaps maps;
+    maps.unit = grid.spacing.minCoeff() / kStepsPerVoxel;
+    if (cap / maps.unit > 0.5 * std::numeric_limits<std::uint16_t>::max())
+        throw Error("reach maps: a cap of " + std::to_string(cap) + " spans too many voxels");
+    maps.cap = cap;
+    maps.padding = std::int64_t(std::ceil(cap / grid.spacing.minCoeff())) + 1;
+    {
+        // The background (label 0, the padding included): D to the nearest labelled voxel.
+        BinaryVolume labelled{grid, std::vector<std::uint8_t>(std::size_t(grid.voxel_count()))};
+        for (std::int64_t v = 0; v < grid.voxel_count(); ++v) labelled.mask[std::size_t(v)] = volume.at_linear(v) != 0;
+        const PaddedDistanceMap map = padded_distance_transform(labelled, DistanceTarget::object, maps.padding);
+        maps.grid = map.grid;
+        maps.distance.assign(map.distance.size(), 0);
+        for (std::size_t v = 0; v < map.distance.size(); ++v)
+            if (map.distance[v] > 0) maps.distance[v] = stored_distance(maps, map.distance[v]);
+    }
+    // Every other label: D to the nearest voxel of another label (the background included).
+    const std::vector<std::array<Index3, 2>> boxes = label_boxes(volume);
+    for (std::uint32_t l = 1; l < boxes.size(); ++l)
+        if (boxes[l][1][0] >= 0) fill_label_distances(volume, l, boxes[l], maps);
+    return maps;
+}
+
+SurfelReach surfel_reach(const VoxelLabels& volume, const DigitalSurface& surface, const PointMatrix& directions,
+                         const ReachMaps& maps) {
+    if (directions.rows() != surface.face_count())
+        throw Error("surfel_reach: one direction per surfel expected (got " + std::to_string(directions.rows()) +
+                    " for " + std::to_string(surface.face_count()) + " surfels)");
+    SurfelReach reach;
+    reach.inner.resize(surface.face_count());
+    reach.outer.resize(surface.face_count());
+    const VoxelGrid& grid = volume.grid();
+#pragma omp parallel for schedule(dynamic, 1024)
+    for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+        const Surfel& s = surface.surfels[std::size_t(f)];
+        const Eigen::Vector3d v = grid.voxel_center(s.voxel[0], s.voxel[1], s.voxel[2]);
+        Eigen::Vector3d w = v, c = v;
+        w[s.axis] += s.sign * grid.spacing[s.axis];
+        c[s.axis] += 0.5 * s.sign * grid.spacing[s.axis];
+        const Eigen::Vector3d n = directions.row(f).transpose();
+        const FaceLabels labels = surface.face_labels.empty() ? FaceLabels{1, 0} : surface.face_labels[std::size_t(f)];
+        reach.inner[f] = reach_along(volume, maps, labels.inner, c, -n, v);
+        reach.outer[f] = reach_along(volume, maps, labels.outer, c, n, w);
+    }
+    return reach;
+}
+
+SurfelReach surfel_reach(const VoxelLabels& volume, const DigitalSurface& surface, const PointMatrix& directions,
+                         double cap) {
+    return surfel_reach(volume, surface, directions, reach_maps(volume, cap));
+}
+
+double half_local_thickness(const VoxelLabels& volume, const ReachMaps& maps, const Index3& v, double limit) {
+    limit = std::min(limit, maps.cap);
+    const std::uint32_t kind = volume.at(v[0], v[1], v[2]);
+    const Eigen::Vector3d& s = maps.grid.spacing;
+    const Index3 centre{v[0] + maps.padding, v[1] + maps.padding, v[2] + maps.padding};
+    Index3 reach;  // a ball of radius ≤ limit containing v has its centre within limit of v
+    for (int a = 0; a < 3; ++a) reach[std::size_t(a)] = std::int64_t(std::ceil(limit / s[a]));
+    double best = 0;
+    for (std::int64_t k = centre[2] - reach[2]; k <= centre[2] + reach[2]; ++k)
+        for (std::int64_t j = centre[1] - reach[1]; j <= centre[1] + reach[1]; ++j)
+            for (std::int64_t i = centre[0] - reach[0]; i <= centre[0] + reach[0]; ++i) {
+                if (!maps.grid.contains(i, j, k) || label_at(volume, maps, {i, j, k}) != kind) continue;
+                const std::uint16_t steps = maps.distance[std::size_t(maps.grid.linear_index(i, j, k))];
+                const double d = maps.unit * steps;
+                if (d <= best) continue;
+                const Eigen::Vector3d offset(double(i - centre[0]) * s.x(), double(j - centre[1]) * s.y(),
+                                             double(k - centre[2]) * s.z());
+                if (ball_contains(maps, steps, offset.norm())) best = std::min(d, limit);
+                if (best >= limit) return limit;
+            }
+    return best;
+}
+
+Eigen::VectorXd max_over_rings(const DigitalSurface& surface, Eigen::VectorXd values, int rings) {
+    for (int ring = 0; ring < rings; ++ring) {
+        Eigen::VectorXd next = values;
+#pragma omp parallel for schedule(static)
+        for (std::int64_t f = 0; f < surface.face_count(); ++f)
+            for (int e = 0; e < 4; ++e) next[f] = std::max(next[f], values[surface.adjacent_face(f, e)]);
+        values.swap(next);
+    }
+    return values;
+}
+
+}  // namespace dsreg

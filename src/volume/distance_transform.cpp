@@ -1,0 +1,114 @@
+// Exact Euclidean distance transform by 1D lower envelopes of parabolas, one axis at a time:
+// after the pass along x, d(p) = min_q f(q) + s_x²(p_x − q_x)² over the row of p; the passes
+// along y and z add the other two squared terms, so the result is the squared distance to the
+// nearest target over the whole grid. Targets outside the grid (the background beyond the
+// border) enter every pass as one extra site with value 0 at index −1 and at index n.
+#include "dsreg/distance_transform.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "dsreg/error.hpp"
+
+namespace dsreg {
+
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+/// The squared distances along one line: out[p] = min_q (in[q] + w·(p − q)²) over the n samples
+/// of `in` and, with `border_sites`, over q = −1 and q = n with value 0. Work space: v, z.
+void lower_envelope(const double* in, double* out, std::int64_t n, double w, bool border_sites,
+                    std::vector<double>& site, std::vector<double>& value, std::vector<double>& boundary) {
+    // Sites are indices q with finite in[q] (plus the two border sites); boundary[k] is where
+    // parabola k starts to be the lowest.
+    std::int64_t k = -1;
+    const auto intersection = [&](double q, double fq, std::int64_t j) {
+        return ((fq + w * q * q) - (value[std::size_t(j)] + w * site[std::size_t(j)] * site[std::size_t(j)])) /
+               (2.0 * w * (q - site[std::size_t(j)]));
+    };
+    const auto push = [&](double q, double fq) {
+        double s = -kInfinity;
+        while (k >= 0) {
+            s = intersection(q, fq, k);
+            if (s > boundary[std::size_t(k)]) break;
+            --k;
+        }
+        ++k;
+        site[std::size_t(k)] = q;
+        value[std::size_t(k)] = fq;
+        boundary[std::size_t(k)] = k == 0 ? -kInfinity : s;
+    };
+    if (border_sites) push(-1.0, 0.0);
+    for (std::int64_t q = 0; q < n; ++q)
+        if (std::isfinite(in[q])) push(double(q), in[q]);
+    if (border_sites) push(double(n), 0.0);
+    if (k < 0) {
+        for (std::int64_t p = 0; p < n; ++p) out[p] = kInfinity;
+        return;
+    }
+    std::int64_t j = 0;
+    for (std::int64_t p = 0; p < n; ++p) {
+        while (j < k && boundary[std::size_t(j + 1)] < double(p)) ++j;
+        const double d = double(p) - site[std::size_t(j)];
+        out[p] = value[std::size_t(j)] + w * d * d;
+    }
+}
+
+/// One pass along `axis` over every line of the grid, in place on `squared`.
+void pass_along(std::vector<float>& squared, const VoxelGrid& grid, int axis, bool border_sites) {
+    const Index3& d = grid.dims;
+    const std::int64_t n = d[std::size_t(axis)];
+    const std::int64_t stride = axis == 0 ? 1 : axis == 1 ? d[0] : d[0] * d[1];
+    const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;  // the two other axes
+    const std::int64_t lines = d[std::size_t(a1)] * d[std::size_t(a2)];
+    const double w = grid.spacing[axis] * grid.spacing[axis];
+#pragma omp parallel
+    {
+        const auto length = static_cast<std::size_t>(n);
+        std::vector<double> in(length), out(length), site(length + 2), value(length + 2), boundary(length + 2);
+#pragma omp for schedule(static)
+        for (std::int64_t line = 0; line < lines; ++line) {
+            Index3 start{0, 0, 0};
+            start[std::size_t(a1)] = line % d[std::size_t(a1)];
+            start[std::size_t(a2)] = line / d[std::size_t(a1)];
+            const std::int64_t first = grid.linear_index(start[0], start[1], start[2]);
+            for (std::int64_t p = 0; p < n; ++p) in[std::size_t(p)] = squared[std::size_t(first + p * stride)];
+            lower_envelope(in.data(), out.data(), n, w, border_sites, site, value, boundary);
+            for (std::int64_t p = 0; p < n; ++p) squared[std::size_t(first + p * stride)] = float(out[std::size_t(p)]);
+        }
+    }
+}
+
+}  // namespace
+
+std::vector<float> euclidean_distance_transform(const BinaryVolume& volume, DistanceTarget target) {
+    return padded_distance_transform(volume, target, 0).distance;
+}
+
+PaddedDistanceMap padded_distance_transform(const BinaryVolume& volume, DistanceTarget target, std::int64_t padding) {
+    if (padding < 0) throw Error("padded_distance_transform: the padding must not be negative");
+    const bool to_background = target == DistanceTarget::background;
+    PaddedDistanceMap map;
+    map.padding = padding;
+    map.grid = volume.grid;
+    for (int a = 0; a < 3; ++a) map.grid.dims[std::size_t(a)] += 2 * padding;
+    map.grid.origin -= double(padding) * volume.grid.spacing;
+    // Squared distances in place (float: exact for integer squared distances below 2^24),
+    // square roots at the end. The padding is background.
+    const float target_value = 0.0f, other = float(kInfinity);
+    map.distance.assign(std::size_t(map.grid.voxel_count()), to_background ? target_value : other);
+    const Index3& d = volume.grid.dims;
+    for (std::int64_t k = 0; k < d[2]; ++k)
+        for (std::int64_t j = 0; j < d[1]; ++j)
+            for (std::int64_t i = 0; i < d[0]; ++i) {
+                const bool object = volume.mask[std::size_t(volume.grid.linear_index(i, j, k))] != 0;
+                map.distance[std::size_t(map.grid.linear_index(i + padding, j + padding, k + padding))] =
+                    object != to_background ? target_value : other;
+            }
+    for (int axis = 0; axis < 3; ++axis) pass_along(map.distance, map.grid, axis, to_background);
+    for (float& value : map.distance) value = std::sqrt(value);
+    return map;
+}
+
+}  // namespace dsreg

@@ -1,0 +1,241 @@
+// The adaptive integral invariants and what they rest on: the local reach of a surfel (known
+// answers on plates), the radius never exceeding the local thickness of the object or of the
+// background (against a brute-force local thickness from the distance transform), and the field
+// against the true normals on thick and on thin shapes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "dsreg/adaptive_normals.hpp"
+#include "dsreg/digital_surface.hpp"
+#include "dsreg/distance_transform.hpp"
+#include "dsreg/evaluation.hpp"
+#include "dsreg/implicit_shape.hpp"
+#include "dsreg/local_reach.hpp"
+#include "dsreg/normals.hpp"
+#include "dsreg/pipeline.hpp"
+#include "test_support.hpp"
+
+namespace dsreg {
+namespace {
+
+/// A plate of `t` voxels along z (z from 8 to 8 + t − 1), 16×16 voxels across, in a grid with
+/// 8 background layers above and below.
+BinaryVolume plate(int t) {
+    return test::make_volume({20, 20, 16 + t}, [t](double x, double y, double z) {
+        return x >= 2 && x <= 17 && y >= 2 && y <= 17 && z >= 8 && z <= 8 + t - 1;
+    });
+}
+
+/// Surfels of the plate's top face far from its rim.
+std::vector<std::int64_t> top_faces_inside(const DigitalSurface& surface) {
+    std::vector<std::int64_t> faces;
+    for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+        const Surfel& s = surface.surfels[std::size_t(f)];
+        if (s.axis == 2 && s.sign > 0 && s.voxel[0] >= 6 && s.voxel[0] <= 13 && s.voxel[1] >= 6 && s.voxel[1] <= 13)
+            faces.push_back(f);
+    }
+    return faces;
+}
+
+TEST(LocalReach, PlateReachIsHalfItsThicknessRoundedUp) {
+    // From the top face, the balls on the inward ray that contain the face's voxel and hold only
+    // object voxel centres: the deepest such centre is at depth i < t/2 with distance min(i+1, t−i)
+    // to the background, so the reach is ⌈t/2⌉ voxels. Above the plate the background is open:
+    // the rays leave the grid, the reach is the cap.
+    for (int t = 1; t <= 6; ++t) {
+        const BinaryVolume volume = plate(t);
+        const DigitalSurface surface = extract_digital_surface(volume, Connectivity::TwentySix);
+        const SurfelReach reach = surfel_reach(volume, surface, trivial_normals(surface), 30.0);
+        const std::vector<std::int64_t> faces = top_faces_inside(surface);
+        ASSERT_FALSE(faces.empty());
+        for (std::int64_t f : faces) {
+            EXPECT_DOUBLE_EQ(reach.inner[f], std::ceil(t / 2.0)) << "plate of " << t << " voxels";
+            EXPECT_DOUBLE_EQ(reach.outer[f], 30.0);
+        }
+    }
+}
+
+TEST(LocalReach, RingsForgetAOneVoxelBumpButNotAThinPlate) {
+    // A voxel on top of a thick block: beside it the background is squeezed between the voxel and
+    // the block, so the side faces of the voxel see an outer reach of one voxel (the ray along
+    // their normal runs one voxel above the block: every background centre on it is one voxel
+    // from the block). The largest reach within one ring of faces is that of the voxel's top
+    // face, whose background is open.
+    BinaryVolume volume = test::make_volume({20, 20, 24}, [](double x, double y, double z) {
+        return x >= 2 && x <= 17 && y >= 2 && y <= 17 && z >= 4 && z <= 13;
+    });
+    volume.mask[std::size_t(volume.grid.linear_index(9, 9, 14))] = 1;
+    const DigitalSurface surface = extract_digital_surface(volume, Connectivity::TwentySix);
+    const SurfelReach reach = surfel_reach(volume, surface, trivial_normals(surface), 30.0);
+    const Eigen::VectorXd robust = max_over_rings(surface, reach.outer, 1);
+    int sides = 0;
+    for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+        const Surfel& s = surface.surfels[std::size_t(f)];
+        if (s.voxel[2] != 14 || s.axis == 2) continue;
+        ++sides;
+        EXPECT_DOUBLE_EQ(reach.outer[f], 1.0);
+        EXPECT_DOUBLE_EQ(robust[f], 30.0);
+    }
+    EXPECT_EQ(sides, 4);
+    // A plate 2 voxels thin keeps its reach of one voxel whatever the rings.
+    const BinaryVolume thin = plate(2);
+    const DigitalSurface thin_surface = extract_digital_surface(thin, Connectivity::TwentySix);
+    const SurfelReach thin_reach = surfel_reach(thin, thin_surface, trivial_normals(thin_surface), 30.0);
+    const Eigen::VectorXd thin_robust = max_over_rings(thin_surface, thin_reach.inner, 3);
+    for (std::int64_t f : top_faces_inside(thin_surface)) EXPECT_DOUBLE_EQ(thin_robust[f], 1.0);
+}
+
+/// Half the local thickness at voxel v: the radius of the largest ball, centred at a voxel y of
+/// the same kind, holding no centre of the other kind (radius D(y), the distance transform to the
+/// other kind) and containing v — by trying every voxel y within `reach` of v (beyond, the
+/// cap: the test only compares radii below it).
+double half_local_thickness(const BinaryVolume& volume, const std::vector<float>& distance, const Index3& v,
+                            double reach) {
+    const bool kind = volume.inside(v[0], v[1], v[2]);
+    const std::int64_t n = std::int64_t(std::ceil(reach));
+    double best = 0;
+    for (std::int64_t k = v[2] - n; k <= v[2] + n; ++k)
+        for (std::int64_t j = v[1] - n; j <= v[1] + n; ++j)
+            for (std::int64_t i = v[0] - n; i <= v[0] + n; ++i) {
+                if (!volume.grid.contains(i, j, k)) {
+                    if (!kind) return reach;  // the background goes on beyond the grid
+                    continue;
+                }
+                if (volume.inside(i, j, k) != kind) continue;
+                const double d = distance[std::size_t(volume.grid.linear_index(i, j, k))];
+                const double to_v = std::sqrt(double((i - v[0]) * (i - v[0]) + (j - v[1]) * (j - v[1]) +
+                                                     (k - v[2]) * (k - v[2])));
+                if (to_v < d) best = std::max(best, std::min(d, reach));
+            }
+    return best;
+}
+
+/// The default adaptive options (the pipeline's) for a digitized shape.
+AdaptiveNormalOptions pipeline_options(const BinaryVolume& volume) {
+    LoadedVolume loaded;
+    loaded.volume = volume;
+    return default_adaptive_options(NormalFieldOptions{}, loaded);
+}
+
+TEST(AdaptiveNormals, RadiusNeverExceedsTheLocalThicknessOfAThinTubeAndShell) {
+    // A torus of tube radius 1.5 voxels and an ellipsoidal shell 2 voxels thick, h = 0.25.
+    const ImplicitShape tube = make_shape("(x^2+y^2+z^2+9-0.140625)^2-36*(x^2+y^2)", 3.6);
+    const ImplicitShape shell =
+        make_shape("(0.1111111*x^2+0.25*y^2+0.4444444*z^2-1)*(0.0816327*x^2+0.16*y^2+0.25*z^2-1)", 4);
+    for (const ImplicitShape& shape : {tube, shell}) {
+        BinaryVolume volume = digitize(shape, 0.25);
+        volume.grid.spacing.setOnes();  // in voxels
+        const DigitalSurface surface = extract_digital_surface(volume, Connectivity::TwentySix);
+        const AdaptiveNormalOptions options = pipeline_options(volume);
+        const AdaptiveNormalField field = adaptive_integral_invariant_normals(volume, surface, options);
+        const std::vector<float> to_background = euclidean_distance_transform(volume, DistanceTarget::background);
+        const std::vector<float> to_object = euclidean_distance_transform(volume, DistanceTarget::object);
+        const double cap = options.max_radius;
+        int thin = 0;
+        for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+            const Surfel& s = surface.surfels[std::size_t(f)];
+            const Index3 v{s.voxel[0], s.voxel[1], s.voxel[2]};
+            Index3 w = v;
+            w[std::size_t(s.axis)] += s.sign;
+            // Local thickness (diameter) of the object at v and of the background at w.
+            const double object = 2 * half_local_thickness(volume, to_background, v, cap);
+            const double background = 2 * half_local_thickness(volume, to_object, w, cap);
+            EXPECT_LE(field.radius[f], object + 1e-9) << shape.name << ", surfel " << f;
+            EXPECT_LE(field.radius[f], background + 1e-9) << shape.name << ", surfel " << f;
+            thin += object < 5 ? 1 : 0;
+        }
+        EXPECT_GT(thin, surface.face_count() / 2) << shape.name << ": a thin shape";
+    }
+}
+
+TEST(AdaptiveNormals, OnALabelMapEachFaceFollowsTheThicknessOfItsTwoLabels) {
+    // A label map (voxel units): an ellipsoid (label 1, thick) wrapped in a shell 2 voxels thick
+    // (label 2) in the background. Every face of the complex bounds the shell, so its radius stays within the
+    // local thickness of the shell, although the union of the labels is a thick solid; and it
+    // stays within that of the face's other label (brute force on each label's indicator).
+    const ImplicitShape shell =
+        make_shape("(0.1111111*x^2+0.25*y^2+0.4444444*z^2-1)*(0.0816327*x^2+0.16*y^2+0.25*z^2-1)", 4);
+    const ImplicitShape core = make_shape("0.1111111*x^2+0.25*y^2+0.4444444*z^2-1", 4);
+    const BinaryVolume shell_voxels = digitize(shell, 0.25), core_voxels = digitize(core, 0.25);
+    ASSERT_EQ(shell_voxels.grid.dims, core_voxels.grid.dims);
+    LabelVolume labels = test::make_labels(shell_voxels.grid.dims, [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+        return shell_voxels.inside(i, j, k) ? 2 : core_voxels.inside(i, j, k) ? 1 : 0;
+    });
+    const DigitalSurface surface = extract_digital_surface(labels, Connectivity::TwentySix);
+    BinaryVolume union_voxels = test::indicator(labels, 1);
+    for (std::size_t q = 0; q < union_voxels.mask.size(); ++q) union_voxels.mask[q] |= labels.labels[q] != 0;
+    const AdaptiveNormalOptions options = pipeline_options(union_voxels);
+    const AdaptiveNormalField field = adaptive_integral_invariant_normals(labels, surface, options);
+    std::vector<std::vector<float>> to_other(3);
+    std::vector<BinaryVolume> indicators;
+    for (std::uint32_t l = 0; l < 3; ++l) {
+        indicators.push_back(test::indicator(labels, l));
+        to_other[l] = euclidean_distance_transform(indicators[l], DistanceTarget::background);
+    }
+    for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+        const Surfel& s = surface.surfels[std::size_t(f)];
+        const FaceLabels& l = surface.face_labels[std::size_t(f)];
+        ASSERT_TRUE(l.inner == 2 || l.outer == 2) << "face " << f;
+        const Index3 v{s.voxel[0], s.voxel[1], s.voxel[2]};
+        Index3 w = v;
+        w[std::size_t(s.axis)] += s.sign;
+        const double inner = 2 * half_local_thickness(indicators[l.inner], to_other[l.inner], v, options.max_radius);
+        EXPECT_LE(field.radius[f], inner + 1e-9) << "face " << f;
+        const double outer = 2 * half_local_thickness(indicators[l.outer], to_other[l.outer], w, options.max_radius);
+        EXPECT_LE(field.radius[f], outer + 1e-9) << "face " << f;
+        EXPECT_LT(field.radius[f], 4.0) << "face " << f << ": the shell is 2 voxels thick";
+    }
+}
+
+/// Mean angle between a field and the true normals of `shape`, in degrees.
+double mean_error(const ImplicitShape& shape, const DigitalSurface& surface, const PointMatrix& u) {
+    const PointMatrix truth = exact_normals(shape, surface);
+    double sum = 0;
+    for (Eigen::Index f = 0; f < u.rows(); ++f) sum += angle_degrees(u.row(f).transpose(), truth.row(f).transpose());
+    return sum / double(u.rows());
+}
+
+TEST(AdaptiveNormals, LargestExtrapolatedRadiusOnAThickSmoothShape) {
+    // A sphere of radius 18 voxels: thick and smooth everywhere, so every surfel gets the largest
+    // radius and the extrapolation, and the field is more accurate than the fixed 5-voxel field.
+    const ImplicitShape sphere = make_shape("x^2+y^2+z^2-20.25", 6);
+    const BinaryVolume volume = digitize(sphere, 0.25);
+    const DigitalSurface surface = extract_digital_surface(volume, Connectivity::TwentySix);
+    const AdaptiveNormalOptions options = pipeline_options(volume);
+    const AdaptiveNormalField field = adaptive_integral_invariant_normals(volume, surface, options);
+    EXPECT_DOUBLE_EQ(field.radius.minCoeff(), options.max_radius);
+    EXPECT_DOUBLE_EQ(field.extrapolated.minCoeff(), 1.0);
+    const double fixed = mean_error(sphere, surface, integral_invariant_normals(volume, surface, 5 * 0.25));
+    EXPECT_LT(mean_error(sphere, surface, field.normals), 0.7 * fixed);
+}
+
+TEST(AdaptiveNormals, ThinTubeFieldIsFarBetterThanTheFixedRadius) {
+    // Tube radius 1.5 voxels: a 5-voxel ball reaches across the tube and points anywhere in its
+    // cross-section; the adaptive radius stays within the tube.
+    const ImplicitShape tube = make_shape("(x^2+y^2+z^2+9-0.140625)^2-36*(x^2+y^2)", 3.6);
+    const BinaryVolume volume = digitize(tube, 0.25);
+    const DigitalSurface surface = extract_digital_surface(volume, Connectivity::TwentySix);
+    const double fixed = mean_error(tube, surface, integral_invariant_normals(volume, surface, 5 * 0.25));
+    const double adaptive =
+        mean_error(tube, surface, adaptive_integral_invariant_normals(volume, surface, pipeline_options(volume)).normals);
+    EXPECT_GT(fixed, 20.0);
+    EXPECT_LT(adaptive, 8.0);
+}
+
+TEST(AdaptiveNormals, RejectsBadOptions) {
+    const BinaryVolume volume = test::make_ball(12, 4, 6);
+    const DigitalSurface surface = extract_digital_surface(volume, Connectivity::TwentySix);
+    AdaptiveNormalOptions o;
+    o.max_radius = 4;
+    o.min_radius = 5;
+    EXPECT_THROW(adaptive_integral_invariant_normals(volume, surface, o), Error);
+    o.min_radius = 0;
+    EXPECT_THROW(adaptive_integral_invariant_normals(volume, surface, o), Error);
+    o.min_radius = 2;
+    o.reach_factor = -1;
+    EXPECT_THROW(adaptive_integral_invariant_normals(volume, surface, o), Error);
+}
+
+}  // namespace
+}  // namespace dsreg
