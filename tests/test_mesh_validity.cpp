@@ -89,12 +89,17 @@ TEST(SelfIntersections, DegenerateTriangleIsReported) {
     EXPECT_TRUE(found.pairs.empty());
 }
 
-TEST(SelfIntersections, NonManifoldEdgeIsAcceptedAndItsThirdTriangleTouchesTheOthers) {
-    // Three triangles on the edge 0–1: the third cannot join the edge structure, keeps its own
-    // copies of 0 and 1, and so touches the first two along that edge.
-    const PointMatrix p = points({{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, -1, 0.1}, {0.5, 0, 1}});
-    const TriangleSelfIntersections found = triangle_self_intersections(p, faces({{0, 1, 2}, {1, 0, 3}, {0, 1, 4}}));
-    EXPECT_EQ(found.pairs, (Pairs{{0, 2}, {1, 2}}));
+TEST(SelfIntersections, NonManifoldEdgeIsSharedByIndexAsAnyOther) {
+    // Three triangles on the edge 0–1 (a junction of a label complex): the third cannot join the
+    // edge structure, yet meets the first two only along the edge they share by index.
+    const PointMatrix p = points({{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, -1, 0.1}, {0.5, 0, 1}, {0.3, 0.5, 0},
+                                  {0.5, 0.2, -1}, {0.5, 0.5, 0.5}, {0.2, 0.6, -0.5}, {0.8, 0.6, 0.5}});
+    EXPECT_TRUE(triangle_self_intersections(p, faces({{0, 1, 2}, {1, 0, 3}, {0, 1, 4}})).pairs.empty());
+    // A third triangle folded onto the first (coplanar, same side of the edge) overlaps it.
+    EXPECT_EQ(triangle_self_intersections(p, faces({{0, 1, 2}, {1, 0, 3}, {0, 1, 5}})).pairs, (Pairs{{0, 2}}));
+    // A third triangle on the edge that crosses a fourth one sharing only vertex 0 with it.
+    EXPECT_EQ(triangle_self_intersections(p, faces({{0, 1, 2}, {1, 0, 3}, {0, 1, 6}, {0, 8, 9}})).pairs,
+              (Pairs{{0, 3}}));
 }
 
 TEST(SelfIntersections, RejectsBadInput) {

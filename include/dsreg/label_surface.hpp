@@ -49,6 +49,7 @@ Junctions find_junctions(const DigitalSurface& surface, const ComplexEdges& edge
 ///    averaged in);
 ///  * a junction point (one, or three or more junction edges): none, no fairness; alignment and
 ///    data place it.
+/// A surface without face labels or surfels (a welded block-wise surface) gets vertex_links(quads).
 VertexLinks fairness_links(const DigitalSurface& surface);
 
 /// The closed surface of one label, made of faces and vertices of the complex, oriented outward

@@ -43,8 +43,8 @@ struct TriangleSelfIntersections {
 };
 
 /// Self-intersections of a triangle mesh (n×3 faces, any orientation, need not be closed or
-/// manifold: a triangle that cannot join the others' edge structure keeps its own copies of
-/// its vertices, so it counts as touching them). Throws dsreg::Error for faces that are not
+/// manifold: two triangles may meet in what they share by index, whatever the edge structure —
+/// at the non-manifold edges and vertices of a label complex too). Throws dsreg::Error for faces that are not
 /// triangles, indices out of range or non-finite coordinates.
 TriangleSelfIntersections triangle_self_intersections(const PointMatrix& vertices, const FaceMatrix& triangles);
 

@@ -74,6 +74,11 @@ Junctions find_junctions(const DigitalSurface& surface, const ComplexEdges& edge
 }
 
 VertexLinks fairness_links(const DigitalSurface& surface) {
+    // Without the faces' labels and surfels (a welded block-wise surface, always binary) the
+    // surface is a closed manifold: its links are the quad links.
+    const std::size_t faces = std::size_t(surface.face_count());
+    if (surface.face_labels.size() != faces || surface.surfels.size() != faces)
+        return vertex_links(surface.quads, surface.vertex_count());
     const ComplexEdges edges = complex_edges(surface);
     const Junctions junctions = find_junctions(surface, edges);
     const std::int64_t m = surface.face_count(), n = surface.vertex_count();

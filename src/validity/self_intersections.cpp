@@ -38,25 +38,59 @@ void check_triangle_mesh(const PointMatrix& vertices, const FaceMatrix& triangle
 
 /// The triangles as a CGAL surface mesh on the same vertex indices; `triangle_of` maps each CGAL
 /// face back to its row. A triangle that does not fit the edge structure of those added before it
-/// (a non-manifold edge or vertex, an orientation clash) gets its own copies of its vertices.
-CgalMesh make_cgal_mesh(const PointMatrix& vertices, const FaceMatrix& triangles, std::vector<std::int64_t>& triangle_of) {
+/// (a non-manifold edge or vertex, an orientation clash) gets its own copies of its vertices, and
+/// `copied` marks its row: CGAL then sees no adjacency for it and reports every contact.
+CgalMesh make_cgal_mesh(const PointMatrix& vertices, const FaceMatrix& triangles, std::vector<std::int64_t>& triangle_of,
+                        std::vector<char>& copied) {
     CgalMesh mesh;
     mesh.reserve(CgalMesh::size_type(vertices.rows()), CgalMesh::size_type(3 * triangles.rows()),
                  CgalMesh::size_type(triangles.rows()));
     const auto point = [&](Eigen::Index v) { return Kernel::Point_3(vertices(v, 0), vertices(v, 1), vertices(v, 2)); };
     for (Eigen::Index v = 0; v < vertices.rows(); ++v) mesh.add_vertex(point(v));
     triangle_of.clear();
+    copied.assign(std::size_t(triangles.rows()), 0);
     for (Eigen::Index t = 0; t < triangles.rows(); ++t) {
         const auto corner = [&](int k) { return CgalVertex(CgalMesh::size_type(triangles(t, k))); };
         CgalFace face = mesh.add_face(corner(0), corner(1), corner(2));
-        if (face == CgalMesh::null_face())
+        if (face == CgalMesh::null_face()) {
+            copied[std::size_t(t)] = 1;
             face = mesh.add_face(mesh.add_vertex(point(triangles(t, 0))), mesh.add_vertex(point(triangles(t, 1))),
                                  mesh.add_vertex(point(triangles(t, 2))));
+        }
         if (std::size_t(face.idx()) != triangle_of.size())
             throw Error("self-intersection test: could not build triangle " + std::to_string(t));  // not expected
         triangle_of.push_back(t);
     }
     return mesh;
+}
+
+/// Whether triangles a and b (rows of `triangles`) meet beyond the vertices they share by index:
+/// the rule CGAL applies to adjacent faces, on the indices (a triangle of a non-manifold edge,
+/// such as a junction of a label complex, shares its edge with several others). Sharing an edge,
+/// they intersect when coplanar and on the same side of it; sharing a vertex, when the edge of
+/// either opposite that vertex meets the other triangle; sharing nothing, when they meet.
+bool meet_beyond_shared_indices(const PointMatrix& vertices, const FaceMatrix& triangles, std::int64_t a, std::int64_t b) {
+    const auto point = [&](std::int64_t t, int k) {
+        const Eigen::Index v = triangles(t, k);
+        return Kernel::Point_3(vertices(v, 0), vertices(v, 1), vertices(v, 2));
+    };
+    const auto triangle = [&](std::int64_t t) { return Kernel::Triangle_3(point(t, 0), point(t, 1), point(t, 2)); };
+    int shared = 0, a_shared[3] = {-1, -1, -1}, b_shared[3] = {-1, -1, -1};
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            if (triangles(a, i) == triangles(b, j)) a_shared[shared] = i, b_shared[shared] = j, ++shared;
+    if (shared == 0) return CGAL::do_intersect(triangle(a), triangle(b));
+    if (shared == 3) return true;  // the same triangle twice
+    if (shared == 2) {
+        const int a_free = 3 - a_shared[0] - a_shared[1], b_free = 3 - b_shared[0] - b_shared[1];
+        const Kernel::Point_3 u = point(a, a_shared[0]), v = point(a, a_shared[1]);
+        return CGAL::coplanar(u, v, point(a, a_free), point(b, b_free)) &&
+               CGAL::coplanar_orientation(u, v, point(a, a_free), point(b, b_free)) == CGAL::POSITIVE;
+    }
+    const int i = a_shared[0], j = b_shared[0];
+    const Kernel::Segment_3 a_opposite(point(a, (i + 1) % 3), point(a, (i + 2) % 3));
+    const Kernel::Segment_3 b_opposite(point(b, (j + 1) % 3), point(b, (j + 2) % 3));
+    return CGAL::do_intersect(triangle(a), b_opposite) || CGAL::do_intersect(triangle(b), a_opposite);
 }
 
 /// The faces in slabs along the longest axis of the mesh, one slab per thread: a face belongs to
@@ -130,7 +164,8 @@ std::vector<std::pair<CgalFace, CgalFace>> cgal_self_intersections(const CgalMes
 TriangleSelfIntersections triangle_self_intersections(const PointMatrix& vertices, const FaceMatrix& triangles) {
     check_triangle_mesh(vertices, triangles);
     std::vector<std::int64_t> triangle_of;
-    const CgalMesh mesh = make_cgal_mesh(vertices, triangles, triangle_of);
+    std::vector<char> copied;
+    const CgalMesh mesh = make_cgal_mesh(vertices, triangles, triangle_of, copied);
     const std::vector<std::pair<CgalFace, CgalFace>> found = cgal_self_intersections(mesh);
 
     TriangleSelfIntersections result;
@@ -138,6 +173,8 @@ TriangleSelfIntersections triangle_self_intersections(const PointMatrix& vertice
         const std::int64_t a = triangle_of[f.idx()], b = triangle_of[g.idx()];
         if (a == b)
             result.degenerate.push_back(a);  // CGAL reports a degenerate face as the pair (f, f)
+        else if ((copied[std::size_t(a)] || copied[std::size_t(b)]) && !meet_beyond_shared_indices(vertices, triangles, a, b))
+            continue;  // a copied triangle only touches what it shares by index
         else
             result.pairs.emplace_back(std::min(a, b), std::max(a, b));
     }

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "dsreg/error.hpp"
+#include "dsreg/label_surface.hpp"
 #include "incremental_validity.hpp"
 #include "dsreg/solvers.hpp"
 
@@ -101,7 +102,7 @@ class Repair {
 public:
     Repair(const DigitalSurface& surface, const PointMatrix& normals, const RegularizationWeights& weights,
            const PointMatrix& positions, const ValidityRepairOptions& options)
-        : surface_(surface), weights_(weights), o_(options), links_(vertex_links(surface.quads, surface.vertex_count())),
+        : surface_(surface), weights_(weights), o_(options), links_(fairness_links(surface)),
           input_field_(normals), field_(normals), targets_(repair_targets(surface, options.split_offset)),
           x_(flatten_points(positions)), factor_(std::size_t(surface.vertex_count()), 1.0),
           held_(std::size_t(surface.vertex_count()), 0), in_region_(std::size_t(surface.vertex_count()), 0),
@@ -451,7 +452,7 @@ ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointM
     result.positions = positions;
     result.normals = normals;
     result.alpha_factors = Eigen::VectorXd::Ones(surface.vertex_count());
-    const VertexLinks links = vertex_links(surface.quads, surface.vertex_count());
+    const VertexLinks links = fairness_links(surface);
     report.energy_before = regularization_energy(positions, surface.vertices, surface.quads, links, normals, weights);
     report.energy_after = report.energy_before;
     report.check_seconds = report.before.seconds;
