@@ -127,17 +127,6 @@ TEST(VoxelArray, ArraysLargerThanATileGiveTheSameMaskInAnyOrder) {
                 ASSERT_EQ(mirrored[std::size_t(i + dims[0] * (j + dims[1] * k))], value(i, dims[1] - 1 - j, k));
 }
 
-/// The error message of `job`, or "no error".
-template <typename Job>
-std::string error_of(Job&& job) {
-    try {
-        job();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "no error";
-}
-
 TEST(VoxelArray, LabelMapsDecodeAsTheFileReadersDecodeThem) {
     // The test values −2, 0 and 3 as int16, written x fastest to a .raw file: its label map is
     // the reference for every layout, byte order and value type of the array.
@@ -170,7 +159,7 @@ TEST(VoxelArray, LabelMapsDecodeAsTheFileReadersDecodeThem) {
     // One label besides the background allowed, two present: refused, naming the array.
     StoredArray<std::int8_t> bytes(ValueKind::Signed, false, {2, 1, 0}, 0);
     bytes.array.description = "mask 7x5x4 int8";
-    EXPECT_NE(error_of([&] { label_voxel_array(bytes.array, 1); }).find("mask 7x5x4 int8: more than 1 distinct labels"),
+    EXPECT_NE(test::error_message([&] { label_voxel_array(bytes.array, 1); }).find("mask 7x5x4 int8: more than 1 distinct labels"),
               std::string::npos);
     EXPECT_EQ(label_voxel_array(bytes.array, 2).values, expected.values);
 }
@@ -182,7 +171,7 @@ TEST(VoxelArray, NonIntegerLabelsAreRefusedNamingTheValueAndTheVoxel) {
     std::memcpy(stored.bytes.data() + 1 * stored.array.byte_strides[0] + 2 * stored.array.byte_strides[1] +
                     3 * stored.array.byte_strides[2],
                 &fraction, sizeof fraction);
-    EXPECT_EQ(error_of([&] { label_voxel_array(stored.array, 100); }),
+    EXPECT_EQ(test::error_message([&] { label_voxel_array(stored.array, 100); }),
               "mask 7x5x4 float64: value 2.5 of voxel #120 is not an integer: a label map holds integer labels");
 }
 
@@ -349,7 +338,7 @@ TEST(ArraySource, ALabelMapArrayIsPlacedAsItsMaskAndKeepsItsLabels) {
     const std::vector<std::int16_t> zeros(values.size(), 0);
     source.array->data = reinterpret_cast<const std::uint8_t*>(zeros.data());
     source.labels.clear();
-    EXPECT_EQ(error_of([&] { load_volume(source); }),
+    EXPECT_EQ(test::error_message([&] { load_volume(source); }),
               "mask 6x5x4 int16: no voxel has a label (with --multi-label every non-zero value is one); its values range "
               "from 0 to 0");
 }
