@@ -176,7 +176,7 @@ def regularize(mask, *, affine=None, affine_space="lps", spacing=None, origin=No
     progress : callable(stage: str, fraction: float), optional
         Called as each stage starts (fraction 0) and ends (fraction 1): "read" (thresholding an
         array, reading a file) or "digitize", "surface", "normals", "at", "regularize",
-        "validity"; inside "regularize", an iterative solver also reports each iteration as
+        "validity" (for a label map "labels" instead: each label's surface); inside "regularize", an iterative solver also reports each iteration as
         stage "solve" (fraction: the share of the way to its stop, log scale). It runs on the
         calling thread; an exception it raises stops the work and propagates (inside the solve:
         at that iteration).
@@ -359,7 +359,8 @@ def read_mesh(path) -> Mesh:
 
     Files mixing triangles and quads come back as triangles (the quads split along their shorter
     diagonal). PLY face properties nx ny nz become face_normals, other vertex properties
-    vertex_scalars (VTK: cell normals and point scalars); coordinate_system is read where 3D
+    vertex_scalars (VTK: cell normals and point scalars); the face properties (cell data)
+    inner_label and outer_label of a label complex become face_labels; coordinate_system is read where 3D
     Slicer writes it. Raises OSError if the file cannot be read, ValueError if it is malformed.
     """
     return Mesh._from_arrays(_dsreg.read_mesh(_os.fspath(path)))

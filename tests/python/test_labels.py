@@ -191,6 +191,19 @@ def test_write_keeps_the_face_labels(tmp_path):
     np.testing.assert_array_equal(triangles.face_labels, np.repeat(result.face_labels, 2, axis=0))
     assert sorted(triangles.label_meshes) == list(VALUES)
     assert all(mesh.faces.shape[1] == 3 for mesh in triangles.label_meshes.values())
+    # triangulate=True (--triangulate) splits the same way in the library.
+    run = dsreg.regularize(sectors(), multi_label=True, triangulate=True)
+    np.testing.assert_array_equal(run.faces, triangles.faces)
+    np.testing.assert_array_equal(run.face_labels, triangles.face_labels)
+    for value, mesh in run.label_meshes.items():
+        np.testing.assert_array_equal(mesh.faces, triangles.label_meshes[value].faces)
+        np.testing.assert_array_equal(mesh.vertices, triangles.label_meshes[value].vertices)
+
+
+def test_progress_reports_the_label_stage():
+    stages = []
+    dsreg.regularize(sectors(), multi_label=True, progress=lambda stage, fraction: stages.append(stage))
+    assert stages[0] == "read" and "labels" in stages and "validity" not in stages
 
 
 def test_a_binary_run_has_no_labels():
