@@ -8,11 +8,14 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <vector>
 
 #include "dsreg/error.hpp"
 #include "dsreg/grid_placement.hpp"
 #include "dsreg/pipeline.hpp"
+#include "dsreg/volume_io.hpp"
 #include "dsreg/voxel_array.hpp"
 #include "test_support.hpp"
 
@@ -122,6 +125,54 @@ TEST(VoxelArray, ArraysLargerThanATileGiveTheSameMaskInAnyOrder) {
         for (std::int64_t j = 0; j < dims[1]; ++j)
             for (std::int64_t i = 0; i < dims[0]; ++i)
                 ASSERT_EQ(mirrored[std::size_t(i + dims[0] * (j + dims[1] * k))], value(i, dims[1] - 1 - j, k));
+}
+
+TEST(VoxelArray, LabelMapsDecodeAsTheFileReadersDecodeThem) {
+    // The test values −2, 0 and 3 as int16, written x fastest to a .raw file: its label map is
+    // the reference for every layout, byte order and value type of the array.
+    std::vector<std::int16_t> stream;
+    for (std::int64_t k = 0; k < kDims[2]; ++k)
+        for (std::int64_t j = 0; j < kDims[1]; ++j)
+            for (std::int64_t i = 0; i < kDims[0]; ++i) stream.push_back(static_cast<std::int16_t>(test_value(i, j, k)));
+    const std::filesystem::path path = std::filesystem::temp_directory_path() / "dsreg_voxel_array_labels.raw";
+    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(stream.data()), std::streamsize(2 * stream.size()));
+    RawVolumeLayout layout;
+    layout.dims = kDims;
+    layout.type = RawVoxelType::Int16;
+    const LabelVolume expected = read_label_volume(path.string(), &layout);
+    std::filesystem::remove(path);
+    ASSERT_EQ(expected.values, (std::vector<std::int64_t>{0, -2, 3}));  // compact, increasing, background first
+
+    const auto expect_same = [&](const VoxelArray& array) {
+        const LabelVolume labels = label_voxel_array(array, VolumeLimits{}.max_labels);
+        EXPECT_EQ(labels.values, expected.values) << value_type_name(array);
+        EXPECT_EQ(labels.labels, expected.labels) << value_type_name(array);
+        EXPECT_EQ(labels.grid.dims, kDims);
+    };
+    for (const bool swap : {false, true})
+        for (const std::array<int, 3> order : {std::array<int, 3>{2, 1, 0}, {0, 1, 2}, {1, 2, 0}})
+            for (const int gap : {0, 3}) {
+                expect_same(StoredArray<std::int16_t>(ValueKind::Signed, swap, order, gap).array);
+                expect_same(StoredArray<std::int64_t>(ValueKind::Signed, swap, order, gap).array);
+                expect_same(StoredArray<float>(ValueKind::Float, swap, order, gap).array);  // floats holding integers
+            }
+    // One label besides the background allowed, two present: refused, naming the array.
+    StoredArray<std::int8_t> bytes(ValueKind::Signed, false, {2, 1, 0}, 0);
+    bytes.array.description = "mask 7x5x4 int8";
+    EXPECT_NE(test::error_message([&] { label_voxel_array(bytes.array, 1); }).find("mask 7x5x4 int8: more than 1 distinct labels"),
+              std::string::npos);
+    EXPECT_EQ(label_voxel_array(bytes.array, 2).values, expected.values);
+}
+
+TEST(VoxelArray, NonIntegerLabelsAreRefusedNamingTheValueAndTheVoxel) {
+    StoredArray<double> stored(ValueKind::Float, false, {2, 1, 0}, 0);
+    stored.array.description = "mask 7x5x4 float64";
+    const double fraction = 2.5;  // voxel (1, 2, 3) = linear index 1 + 7 * (2 + 5 * 3) = 120
+    std::memcpy(stored.bytes.data() + 1 * stored.array.byte_strides[0] + 2 * stored.array.byte_strides[1] +
+                    3 * stored.array.byte_strides[2],
+                &fraction, sizeof fraction);
+    EXPECT_EQ(test::error_message([&] { label_voxel_array(stored.array, 100); }),
+              "mask 7x5x4 float64: value 2.5 of voxel #120 is not an integer: a label map holds integer labels");
 }
 
 TEST(VoxelArray, HalfFloatsDecodeExactly) {
@@ -258,6 +309,38 @@ TEST(ArraySource, PipelineOnAnArrayEqualsThePipelineOnItsMask) {
     EXPECT_EQ(from_array.surface.quads, from_mask.surface.quads);
     EXPECT_TRUE(from_array.regularization.positions.isApprox(from_mask.regularization.positions, 1e-12));
     EXPECT_EQ(from_array.stage_seconds.front().first, "read");
+}
+
+TEST(ArraySource, ALabelMapArrayIsPlacedAsItsMaskAndKeepsItsLabels) {
+    const std::vector<std::int16_t> values = [] {
+        std::vector<std::int16_t> v(6 * 5 * 4, 0);
+        for (std::size_t n = 0; n < v.size(); ++n) v[n] = static_cast<std::int16_t>(n % 3 == 0 ? 9 : n % 7 == 0 ? 4 : 0);
+        return v;
+    }();
+    VolumeSource source;
+    source.array = VoxelArray{reinterpret_cast<const std::uint8_t*>(values.data()), {6, 5, 4}, {2, 12, 60},
+                              ValueKind::Signed, 2, false, "mask 6x5x4 int16"};
+    source.affine = oblique_mirrored_affine();
+    source.multi_label = true;
+    const LoadedVolume loaded = load_volume(source);
+    ASSERT_TRUE(loaded.labels.has_value());
+    EXPECT_EQ(loaded.labels->values, (std::vector<std::int64_t>{0, 4, 9}));
+    const VoxelGrid placed = grid_from_affine({6, 5, 4}, oblique_mirrored_affine(), OutputSpace::Lps);
+    EXPECT_EQ(loaded.labels->grid.spacing, placed.spacing);
+    EXPECT_EQ(loaded.labels->grid.origin, placed.origin);
+    EXPECT_EQ(loaded.labels->grid.direction, placed.direction);
+    EXPECT_EQ(loaded.volume.grid.direction, placed.direction);
+    for (std::size_t n = 0; n < values.size(); ++n) ASSERT_EQ(loaded.labels->values[loaded.labels->labels[n]], values[n]);
+    EXPECT_EQ(loaded.file.format, "array");
+    EXPECT_TRUE(loaded.file.world_geometry);
+    source.labels = {9};
+    EXPECT_EQ(load_volume(source).labels->values, (std::vector<std::int64_t>{0, 9}));
+    const std::vector<std::int16_t> zeros(values.size(), 0);
+    source.array->data = reinterpret_cast<const std::uint8_t*>(zeros.data());
+    source.labels.clear();
+    EXPECT_EQ(test::error_message([&] { load_volume(source); }),
+              "mask 6x5x4 int16: no voxel has a label (with --multi-label every non-zero value is one); its values range "
+              "from 0 to 0");
 }
 
 TEST(ArraySource, EmptyObjectAndPlacementErrorsNameTheProblem) {

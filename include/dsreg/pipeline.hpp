@@ -348,6 +348,12 @@ std::string label_output_path(const std::string& mesh_path, std::int64_t value);
 /// file has a world geometry. Triangles are split in the grid frame, where lengths are physical.
 PolygonMesh output_mesh(const PipelineResult& result, const PipelineOutputs& outputs, bool digital = false);
 
+/// The closed surface of the label result.label_meshes[index], oriented outward, as it is written
+/// next to -o (label_output_path): its own vertices, bit for bit the complex's positions in
+/// output_mesh() (the same map of the same points), the field u flipped where the label is the
+/// outer one, triangles with outputs.triangulate.
+PolygonMesh output_label_mesh(const PipelineResult& result, const PipelineOutputs& outputs, std::size_t index);
+
 /// The --html page (html_view.hpp): one layer, the regularized surface as quads (also with
 /// --triangulate: the split is the user's output format, not the result) with the digital surface
 /// as a toggle, the field u, the feature map v and its lines after AT; and the run's summary:

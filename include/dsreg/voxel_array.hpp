@@ -39,6 +39,14 @@ void check_voxel_array(const VoxelArray& array);
 /// the file readers do), else 0. One pass over the values, in parallel over the rows.
 std::vector<std::uint8_t> threshold_voxel_array(const VoxelArray& array, const ValueRange& range);
 
+/// The label map of the array, as read_label_volume makes one of a file (volume_io.hpp): every
+/// distinct value a label, 0 the background, label indices compact and increasing with the value;
+/// grid dims only (spacing 1, origin 0: the caller places it). Throws dsreg::Error naming the
+/// array and the voxel (its linear index, x fastest) for a value that is not an integer of
+/// magnitude below 2^53 (2.5, NaN) or for more than `max_labels` distinct labels. One pass over
+/// the values on the calling thread (the label table is shared), in the array's memory order.
+LabelVolume label_voxel_array(const VoxelArray& array, std::int64_t max_labels);
+
 /// The smallest and largest value (NaN left out), or nothing if every value is NaN.
 std::optional<std::pair<double, double>> voxel_array_value_range(const VoxelArray& array);
 

@@ -153,6 +153,12 @@ def regularize(mask, *, affine=None, affine_space="lps", spacing=None, origin=No
         reads: NIfTI, NRRD, MetaImage, TIFF, HDF5, VTK, DICOM, .npy, .vol, .longvol, .pgm3d,
         .raw with ``raw_dims=`` etc.). None with ``shape=`` digitizes an implicit
         shape as ``dsreg regularize --shape`` does (``h=``, ``box=``).
+        With ``multi_label=True`` (or ``labels=[1, 4, 7]``, which keeps those and turns the
+        other labels into background) the array is a label map: every distinct non-zero value
+        is a label, any integer dtype (or floats holding integers; 2.5 or NaN raises ValueError
+        naming the voxel), any strides, placed by ``affine``/``spacing``/``origin`` as a mask
+        is; all the interfaces are regularized at once (the command line's --multi-label,
+        docs/multi-label.md).
     affine : array_like (4, 4), optional
         Voxel-to-world matrix of the array: voxel (i, j, k) is centred at
         ``affine @ (i, j, k, 1)`` in ``affine_space``. Its columns may be oblique or mirrored but
@@ -170,7 +176,7 @@ def regularize(mask, *, affine=None, affine_space="lps", spacing=None, origin=No
     progress : callable(stage: str, fraction: float), optional
         Called as each stage starts (fraction 0) and ends (fraction 1): "read" (thresholding an
         array, reading a file) or "digitize", "surface", "normals", "at", "regularize",
-        "validity"; inside "regularize", an iterative solver also reports each iteration as
+        "validity" (for a label map "labels" instead: each label's surface); inside "regularize", an iterative solver also reports each iteration as
         stage "solve" (fraction: the share of the way to its stop, log scale). It runs on the
         calling thread; an exception it raises stops the work and propagates (inside the solve:
         at that iteration).
@@ -191,7 +197,11 @@ def regularize(mask, *, affine=None, affine_space="lps", spacing=None, origin=No
         vertices (n, 3) float64, faces (m, 4) int64 counter-clockwise seen from outside (with
         ``triangulate=True``, (2m, 3) triangles split along the shorter diagonal),
         face_normals (the normal field u), vertex_scalars (``"v"`` with ``normals="at"``), report
-        (the command line's ``--report`` content).
+        (the command line's ``--report`` content). Of a label map: the complex, every interface
+        face once, with ``face_labels`` (m, 2) int64, the label values (inner, outer) on its two
+        sides (0: background; the normal points from inner to outer), and ``label_meshes``
+        {label value: Mesh}, each label's closed outward surface with the complex's vertex
+        positions bit for bit and its line of ``report["labels"]`` as its report.
 
     Raises
     ------
@@ -228,7 +238,10 @@ def regularize(mask, *, affine=None, affine_space="lps", spacing=None, origin=No
         _vector3("origin", origin),
         progress,
     )
-    return Mesh._from_arrays(arrays, _json.loads(arrays["report"]))
+    mesh = Mesh._from_arrays(arrays, _json.loads(arrays["report"]))
+    for entry in mesh.report.get("labels", []):  # each label's own line of the report
+        mesh.label_meshes[entry["label"]].report = dict(entry)
+    return mesh
 
 
 regularize.__doc__ += (
@@ -346,7 +359,8 @@ def read_mesh(path) -> Mesh:
 
     Files mixing triangles and quads come back as triangles (the quads split along their shorter
     diagonal). PLY face properties nx ny nz become face_normals, other vertex properties
-    vertex_scalars (VTK: cell normals and point scalars); coordinate_system is read where 3D
+    vertex_scalars (VTK: cell normals and point scalars); the face properties (cell data)
+    inner_label and outer_label of a label complex become face_labels; coordinate_system is read where 3D
     Slicer writes it. Raises OSError if the file cannot be read, ValueError if it is malformed.
     """
     return Mesh._from_arrays(_dsreg.read_mesh(_os.fspath(path)))

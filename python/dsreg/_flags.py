@@ -21,7 +21,7 @@ class Flag(NamedTuple):
     """A flag of the command line."""
 
     name: str  #: without the leading "--", e.g. "ii-kernel"
-    values: int  #: values it takes: 0 for a switch (--clamp), 3 for --raw-dims X,Y,Z
+    values: int  #: values it takes: 0 for a switch (--clamp), 3 for --raw-dims X,Y,Z, -1 for a list (--labels 1,4,7)
     type: str  #: as --help shows it, e.g. "FLOAT", "TEXT:{ball,biweight}"
     default: str  #: as --help shows it ("" if none)
     help: str
@@ -54,9 +54,13 @@ def _flag_argument(flag: Flag, value) -> Optional[str]:
         if not isinstance(value, (bool, np.bool_)):
             raise TypeError(f"{flag.keyword}= takes True or False (got {value!r})")
         return f"--{flag.name}" if value else None
-    if flag.values > 1:
-        if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != flag.values:
-            raise TypeError(f"{flag.keyword}= takes {flag.values} values (got {value!r})")
+    if flag.values == -1 and isinstance(value, numbers.Number):
+        value = [value]  # labels=3 is labels=[3]
+    if flag.values > 1 or flag.values == -1:
+        is_list = not isinstance(value, (str, bytes)) and hasattr(value, "__len__")
+        if not is_list or (flag.values > 1 and len(value) != flag.values) or len(value) == 0:
+            wanted = f"{flag.values} values" if flag.values > 1 else "a list of one or more values"
+            raise TypeError(f"{flag.keyword}= takes {wanted} (got {value!r})")
         text = ",".join(_value_text(flag.keyword, v) for v in value)
     else:
         text = _value_text(flag.keyword, value)
@@ -100,7 +104,8 @@ def keyword_docs(table: Mapping[str, Flag], keywords) -> str:
     lines = []
     for keyword in keywords:
         flag = table[keyword]
-        kind = "bool" if flag.values == 0 else flag.type + (f" × {flag.values}" if flag.values > 1 else "")
+        count = f" × {flag.values}" if flag.values > 1 else " list" if flag.values == -1 else ""
+        kind = "bool" if flag.values == 0 else flag.type + count
         default = f", default {flag.default}" if flag.default else ""
         lines.append(f"    {keyword} : {kind}{default}  (--{flag.name})")
         lines.append(textwrap.fill(flag.help, width=96, initial_indent=" " * 8, subsequent_indent=" " * 8))

@@ -28,6 +28,21 @@ def _faces(values, vertex_count: int) -> np.ndarray:
     return array
 
 
+_INNER, _OUTER = "inner_label", "outer_label"  # the face integers of a label complex (the command line's names)
+
+
+def _face_labels(values, face_count: int) -> np.ndarray:
+    array = np.asarray(values)
+    if array.shape != (face_count, 2) or (array.size and array.dtype.kind not in "iu"):
+        raise ValueError(
+            f"face_labels: an integer array of shape ({face_count}, 2) is needed (got shape {array.shape}, dtype {array.dtype})"
+        )
+    array = np.ascontiguousarray(array, dtype=np.int64)
+    if array.size and (array.min() < -(2**31) or array.max() >= 2**31):
+        raise ValueError("face_labels: the label values must fit 32-bit integers (the files' face properties)")
+    return array
+
+
 class Mesh:
     """A polygon mesh whose faces all have 4 vertices (quads) or all 3 (triangles).
 
@@ -53,10 +68,27 @@ class Mesh:
         ``write`` records it where 3D Slicer reads it ("SPACE=LPS"); ``read_mesh`` restores it.
     report : dict
         For a result of dsreg.regularize, the command line's ``--report`` content: counts, grid,
-        parameters, solve, energies, per-stage seconds, peak memory. Empty otherwise.
+        parameters, solve, energies, per-stage seconds, peak memory; for a label map also
+        ``"labels"`` (per label: faces, area, volume against the voxel volume, components,
+        genus) and ``"label_complex"``. Empty otherwise.
+    face_labels : numpy.ndarray, (m, 2) int64, or None
+        For a label complex (``regularize(..., multi_label=True)`` or ``labels=[...]``, or a
+        complex file the command line wrote): the label values (inner_label, outer_label) on
+        the two sides of each face, 0 for the background; the face's right-hand normal (and
+        its face_normals row) points from the inner label to the outer one. None otherwise.
+        ``write`` stores them as the command line does: integer PLY face properties
+        inner_label and outer_label, VTK/VTP cell data of those names.
+    label_meshes : dict of int to Mesh
+        For a label complex returned by regularize: the closed surface of each label (keyed by
+        its value, increasing), oriented outward (counter-clockwise seen from outside the
+        label), with the complex's vertex positions bit for bit where labels touch (each
+        label's vertices are copies of the complex's rows); its face_normals are the complex's,
+        flipped where the label is the outer one. What ``dsreg regularize --multi-label -o
+        out.ply`` writes to out-<label>.ply. Empty otherwise.
     """
 
-    def __init__(self, vertices, faces, face_normals=None, vertex_scalars=None, report=None, coordinate_system=""):
+    def __init__(self, vertices, faces, face_normals=None, vertex_scalars=None, report=None, coordinate_system="",
+                 face_labels=None):
         self.vertices = _points("vertices", vertices)
         self.faces = _faces(faces, len(self.vertices))
         self.face_normals = None if face_normals is None else _points("face_normals", face_normals, len(self.faces))
@@ -70,6 +102,8 @@ class Mesh:
         if coordinate_system not in ("", "LPS", "RAS"):
             raise ValueError(f"coordinate_system: 'LPS', 'RAS' or '' (got {coordinate_system!r})")
         self.coordinate_system = coordinate_system
+        self.face_labels = None if face_labels is None else _face_labels(face_labels, len(self.faces))
+        self.label_meshes: Dict[int, "Mesh"] = {}
 
     @classmethod
     def _from_arrays(cls, arrays: dict, report=None) -> "Mesh":
@@ -82,7 +116,19 @@ class Mesh:
         mesh.vertex_scalars = dict(arrays["vertex_scalars"])
         mesh.report = dict(report or {})
         mesh.coordinate_system = arrays.get("coordinate_system", "")
+        integers = arrays.get("face_integers", {})
+        mesh.face_labels = None
+        if _INNER in integers and _OUTER in integers:
+            mesh.face_labels = np.column_stack([integers[_INNER], integers[_OUTER]]).astype(np.int64)
+        mesh.label_meshes = {int(value): cls._from_arrays(label) for value, label in arrays.get("label_meshes", [])}
         return mesh
+
+    def _face_integers(self, face_count: int):
+        """The face labels as the C++ module's named int32 face integers, checked again."""
+        if self.face_labels is None:
+            return []
+        labels = _face_labels(self.face_labels, face_count)
+        return [(_INNER, labels[:, 0].astype(np.int32)), (_OUTER, labels[:, 1].astype(np.int32))]
 
     def _arrays(self):
         """(vertices, faces as int32, face normals or (0, 3), scalars) for the C++ module, checked
@@ -97,9 +143,12 @@ class Mesh:
     def triangles(self) -> "Mesh":
         """The mesh with each quad split along its shorter diagonal into two triangles (the
         command line's ``--triangulate``), orientation kept; face normals are repeated for both
-        halves. A triangle mesh is returned as it is."""
-        mesh = Mesh._from_arrays(_dsreg.triangulate(*self._arrays()), self.report)
+        halves, and so are face_labels; label_meshes are split too. A triangle mesh is returned
+        as it is."""
+        arrays = self._arrays()
+        mesh = Mesh._from_arrays(_dsreg.triangulate(*arrays, self._face_integers(len(arrays[1]))), self.report)
         mesh.coordinate_system = self.coordinate_system
+        mesh.label_meshes = {value: label.triangles() for value, label in self.label_meshes.items()}
         return mesh
 
     def write(self, path) -> None:
@@ -111,11 +160,15 @@ class Mesh:
         - ``.vtk`` (legacy, binary), ``.vtp`` (VTK XML): 3D Slicer's model formats, quads kept,
           face normals as cell data "u", vertex scalars as point data.
 
-        coordinate_system ("LPS"/"RAS") is recorded as 3D Slicer records it. The file is written under a temporary name and renamed when complete. Raises OSError if
+        face_labels, if any, are written as the integer face properties (PLY) or cell data
+        (VTK, VTP) inner_label and outer_label, as the command line writes a label complex (the
+        other formats cannot hold them). coordinate_system ("LPS"/"RAS") is recorded as 3D Slicer records it. The file is written under a temporary name and renamed when complete. Raises OSError if
         it cannot be written, ValueError for an unknown extension.
         """
-        _dsreg.write_mesh(os.fspath(path), *self._arrays(), self.coordinate_system)
+        arrays = self._arrays()
+        _dsreg.write_mesh(os.fspath(path), *arrays, self.coordinate_system, self._face_integers(len(arrays[1])))
 
     def __repr__(self) -> str:
         kind = {3: "triangles", 4: "quads"}.get(self.faces.shape[1], "faces")
-        return f"<dsreg.Mesh: {len(self.vertices)} vertices, {len(self.faces)} {kind}>"
+        labels = f", {len(self.label_meshes)} label meshes" if self.label_meshes else ""
+        return f"<dsreg.Mesh: {len(self.vertices)} vertices, {len(self.faces)} {kind}{labels}>"

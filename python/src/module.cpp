@@ -38,13 +38,15 @@ using IndexMatrix = Eigen::Matrix<std::int64_t, Eigen::Dynamic, Eigen::Dynamic, 
 // ---------------------------------------------------------------------------------------------
 // Flags
 
-/// (name without "--", number of values (0 for a switch such as --clamp), type, default, help)
-/// of every named flag of `app`, in the order of `--help`.
+/// (name without "--", number of values (0 for a switch such as --clamp, -1 for a list of any
+/// length such as --labels 1,4,7), type, default, help) of every named flag of `app`, in the
+/// order of `--help`.
 py::list flag_table(const CLI::App& app) {
     py::list table;
     for (const CLI::Option* option : app.get_options()) {
         if (option->get_lnames().empty()) continue;
-        table.append(py::make_tuple(option->get_lnames().front(), option->get_items_expected_max(),
+        const int values = option->get_items_expected_max();
+        table.append(py::make_tuple(option->get_lnames().front(), values >= CLI::detail::expected_max_vector_size ? -1 : values,
                                     option->get_type_name(), option->get_default_str(), option->get_description()));
     }
     return table;
@@ -93,14 +95,23 @@ py::dict mesh_dict(PolygonMesh&& mesh) {
     d["face_normals"] = py::cast(std::move(mesh.face_normals));
     d["vertex_scalars"] = scalars;
     d["coordinate_system"] = mesh.coordinate_system;
+    py::dict integers;  // e.g. inner_label, outer_label of a label complex
+    for (auto& [name, values] : mesh.face_integers) integers[py::str(name)] = py::cast(std::move(values));
+    d["face_integers"] = integers;
     return d;
 }
 
+using FaceIntegers = std::vector<std::pair<std::string, Eigen::VectorXi>>;
+
 PolygonMesh polygon_mesh(PointMatrix vertices, FaceMatrix faces, PointMatrix face_normals,
                          std::vector<std::pair<std::string, Eigen::VectorXd>> vertex_scalars,
-                         std::string coordinate_system = "") {
+                         std::string coordinate_system = "", FaceIntegers face_integers = {}) {
+    for (const auto& [name, values] : face_integers)
+        if (values.size() != faces.rows())
+            throw Error("face integers " + name + ": " + std::to_string(faces.rows()) + " values are needed (got " +
+                        std::to_string(values.size()) + ")");
     return PolygonMesh{std::move(vertices), std::move(faces), std::move(face_normals), std::move(vertex_scalars),
-                       std::move(coordinate_system)};
+                       std::move(coordinate_system), std::move(face_integers)};
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -175,17 +186,24 @@ py::dict regularize(const py::object& input, const std::vector<std::string>& arg
     Interruption interruption(progress);
     std::string report;
     PolygonMesh mesh;
+    std::vector<std::pair<std::int64_t, PolygonMesh>> label_meshes;  // of a label map: (value, closed surface)
     try {
         py::gil_scoped_release release;
         PipelineResult result = run_pipeline(source, options, interruption.callback());
         if (outputs.any()) write_pipeline_outputs(result, options, outputs, source, interruption.callback());
         mesh = output_mesh(result, outputs);
+        for (std::size_t i = 0; i < result.label_meshes.size(); ++i)
+            label_meshes.emplace_back(result.surface.label_values[result.label_meshes[i].label],
+                                      output_label_mesh(result, outputs, i));
         report = pipeline_report(result, options, outputs, source).dump();
     } catch (const Interrupted&) {
         interruption.raise();
     }
     py::dict d = mesh_dict(std::move(mesh));
     d["report"] = report;
+    py::list labels;
+    for (auto& [value, label_mesh] : label_meshes) labels.append(py::make_tuple(value, mesh_dict(std::move(label_mesh))));
+    d["label_meshes"] = labels;
     return d;
 }
 
@@ -242,17 +260,17 @@ py::dict read_mesh_file(const std::string& path) {
 
 void write_mesh_file(const std::string& path, PointMatrix vertices, FaceMatrix faces, PointMatrix face_normals,
                      std::vector<std::pair<std::string, Eigen::VectorXd>> vertex_scalars,
-                     const std::string& coordinate_system) {
+                     const std::string& coordinate_system, FaceIntegers face_integers) {
     const PolygonMesh mesh = polygon_mesh(std::move(vertices), std::move(faces), std::move(face_normals),
-                                          std::move(vertex_scalars), coordinate_system);
+                                          std::move(vertex_scalars), coordinate_system, std::move(face_integers));
     py::gil_scoped_release release;
     write_mesh(path, mesh);
 }
 
 py::dict triangulate(PointMatrix vertices, FaceMatrix faces, PointMatrix face_normals,
-                     std::vector<std::pair<std::string, Eigen::VectorXd>> vertex_scalars) {
-    PolygonMesh mesh =
-        polygon_mesh(std::move(vertices), std::move(faces), std::move(face_normals), std::move(vertex_scalars));
+                     std::vector<std::pair<std::string, Eigen::VectorXd>> vertex_scalars, FaceIntegers face_integers) {
+    PolygonMesh mesh = polygon_mesh(std::move(vertices), std::move(faces), std::move(face_normals),
+                                    std::move(vertex_scalars), "", std::move(face_integers));
     {
         py::gil_scoped_release release;
         mesh = triangulate_shorter_diagonal(mesh);
@@ -295,7 +313,7 @@ PYBIND11_MODULE(_dsreg, m) {
     m.def("evaluate", &evaluate, py::arg("vertices"), py::arg("faces"), py::arg("face_normals"), py::arg("args"));
     m.def("read_mesh", &read_mesh_file, py::arg("path"));
     m.def("write_mesh", &write_mesh_file, py::arg("path"), py::arg("vertices"), py::arg("faces"),
-          py::arg("face_normals"), py::arg("vertex_scalars"), py::arg("coordinate_system"));
+          py::arg("face_normals"), py::arg("vertex_scalars"), py::arg("coordinate_system"), py::arg("face_integers"));
     m.def("triangulate", &triangulate, py::arg("vertices"), py::arg("faces"), py::arg("face_normals"),
-          py::arg("vertex_scalars"));
+          py::arg("vertex_scalars"), py::arg("face_integers"));
 }

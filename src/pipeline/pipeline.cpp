@@ -220,10 +220,8 @@ PolygonMesh mesh_for_output(PolygonMesh mesh, const PipelineResult& result, cons
 void write_label_meshes(const PipelineResult& result, const PipelineOutputs& outputs, const ProgressCallback& progress) {
     const std::size_t count = result.label_meshes.size();
     for (std::size_t i = 0; i < count; ++i) {
-        const LabelMesh& mesh = result.label_meshes[i];
-        const PolygonMesh polygons = label_polygon_mesh(mesh, result.regularization.positions, result.field.normals);
-        write_mesh(label_output_path(outputs.mesh, result.surface.label_values[mesh.label]),
-                   mesh_for_output(outputs.triangulate ? triangulate_shorter_diagonal(polygons) : polygons, result, outputs));
+        write_mesh(label_output_path(outputs.mesh, result.surface.label_values[result.label_meshes[i].label]),
+                   output_label_mesh(result, outputs, i));
         report_progress(progress, "write", double(i + 1) / double(count));
     }
 }
@@ -381,6 +379,12 @@ PolygonMesh output_mesh(const PipelineResult& result, const PipelineOutputs& out
     return mesh_for_output(result_mesh(result, outputs.triangulate, digital), result, outputs);
 }
 
+PolygonMesh output_label_mesh(const PipelineResult& result, const PipelineOutputs& outputs, std::size_t index) {
+    const PolygonMesh polygons =
+        label_polygon_mesh(result.label_meshes.at(index), result.regularization.positions, result.field.normals);
+    return mesh_for_output(outputs.triangulate ? triangulate_shorter_diagonal(polygons) : polygons, result, outputs);
+}
+
 void check_pipeline_outputs(const PipelineOutputs& o) {
     if (!o.mesh.empty()) check_mesh_output_path("-o", o.mesh);
     if (!o.input_mesh.empty()) check_mesh_output_path("--input-mesh", o.input_mesh);
@@ -510,7 +514,7 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
                          {"fragments", outputs.fragments}};
     if (!r.label_meshes.empty()) {
         nlohmann::json labels = nlohmann::json::array();
-        for (const LabelMeasures& m : r.label_measures) labels.push_back(label_json(m, label_output_path(outputs.mesh, m.value)));
+        for (const LabelMeasures& m : r.label_measures) labels.push_back(label_json(m, outputs.mesh.empty() ? "" : label_output_path(outputs.mesh, m.value)));
         report["labels"] = labels;
         std::int64_t pinches = 0;
         for (const LabelMeasures& m : r.label_measures) pinches += m.pinch_vertices;

@@ -211,7 +211,9 @@ VoxelGrid array_grid(const VolumeSource& o) {
     return grid;
 }
 
-LoadedVolume threshold_array(const VolumeSource& o) {
+/// An array input, checked against the voxel limits (a mask or label indices per voxel, as the
+/// options ask), with its grid, description and file information; the voxels are the caller's.
+LoadedVolume array_header(const VolumeSource& o) {
     const VoxelArray& array = *o.array;
     check_voxel_array(array);
     const double voxels = double(array.dims[0]) * double(array.dims[1]) * double(array.dims[2]);
@@ -222,12 +224,25 @@ LoadedVolume threshold_array(const VolumeSource& o) {
                                                               : " (--max-voxels)"));
     LoadedVolume loaded;
     loaded.volume.grid = array_grid(o);
-    loaded.volume.mask = threshold_voxel_array(array, object_range(o));
     loaded.description = array.description;
     loaded.h = loaded.volume.grid.spacing.maxCoeff();
     loaded.file.format = "array";
     loaded.file.value_type = value_type_name(array);
     loaded.file.world_geometry = o.affine.has_value();
+    return loaded;
+}
+
+LoadedVolume threshold_array(const VolumeSource& o) {
+    LoadedVolume loaded = array_header(o);
+    loaded.volume.mask = threshold_voxel_array(*o.array, object_range(o));
+    return loaded;
+}
+
+/// The label map of an array, placed as its mask would be (affine, or spacing and origin).
+LoadedVolume label_array(const VolumeSource& o) {
+    LoadedVolume loaded = array_header(o);
+    loaded.labels = label_voxel_array(*o.array, VolumeLimits{}.max_labels);
+    loaded.labels->grid = loaded.volume.grid;
     return loaded;
 }
 
@@ -296,12 +311,13 @@ void check_source(const VolumeSource& o) {
     if (o.max_voxels <= 0) throw Error("--max-voxels must be positive (got " + std::to_string(o.max_voxels) + ")");
 }
 
-/// --multi-label: the label map of the file (every distinct value a label), or the shape's
-/// digitization as the label map {0, 1}; --labels keeps some; --spacing applies.
+/// --multi-label: the label map of the file or array (every distinct value a label), or the
+/// shape's digitization as the label map {0, 1}; --labels keeps some; --spacing applies.
 LoadedVolume load_label_map(const VolumeSource& o) {
-    if (o.array) throw Error("--multi-label reads label maps from files and shapes, not yet from arrays");
     LoadedVolume loaded;
-    if (!o.shape.empty()) {
+    if (o.array) {
+        loaded = label_array(o);
+    } else if (!o.shape.empty()) {
         loaded = digitize_shape(o);
         loaded.labels = label_volume_from_mask(loaded.volume);
     } else {
@@ -322,7 +338,7 @@ LoadedVolume load_label_map(const VolumeSource& o) {
     for (std::size_t l = 1; l < counts.size(); ++l) labelled += counts[l], present += counts[l] > 0;
     if (labelled == 0) {
         const std::string values = o.shape.empty() ? input_value_range(o) : "";
-        throw Error((o.shape.empty() ? o.input_path : o.shape) + ": no voxel has a label (with --multi-label every non-zero value is one)" +
+        throw Error((o.array ? o.array->description : o.shape.empty() ? o.input_path : o.shape) + ": no voxel has a label (with --multi-label every non-zero value is one)" +
                     (values.empty() ? "" : "; " + values));
     }
     loaded.description += " (" + std::to_string(present) + (present == 1 ? " label)" : " labels)");
