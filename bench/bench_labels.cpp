@@ -128,17 +128,22 @@ Row separate_runs(const LabelShape& shape, const LabelVolume& labels, const Digi
     return {"dsreg once per label", a.mean, a.p95, j.mean, j.p95, candidates ? double(shared) / double(candidates) : 0.0};
 }
 
+LoadedVolume digitized_shape(const LabelShape& shape, const std::string& name, double h) {
+    LoadedVolume loaded;
+    loaded.labels = digitize_labels(shape, h);
+    loaded.volume.grid = loaded.labels->grid;
+    loaded.description = name;
+    loaded.h = h;
+    return loaded;
+}
+
 int accuracy(const std::vector<double>& steps) {
     std::printf("| shape | h (ball radius) | faces | junction vertices | method | all: mean | p95 | junctions: mean | p95 | shared |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
     for (const std::string& name : label_shape_names())
         for (const double h : steps) {
             const LabelShape shape = make_label_shape(name);
-            LoadedVolume loaded;
-            loaded.labels = digitize_labels(shape, h);
-            loaded.volume.grid = loaded.labels->grid;
-            loaded.description = name;
-            loaded.h = h;
+            const LoadedVolume loaded = digitized_shape(shape, name, h);
             PipelineOptions options;
             options.solver = SolverKind::Cholmod;
             const PipelineResult result = run_pipeline(loaded, options);
@@ -322,11 +327,7 @@ int repair(const std::vector<double>& steps) {
     for (const std::string name : {"sectors", "layers"})
         for (const double h : steps) {
             const LabelShape shape = make_label_shape(name);
-            LoadedVolume loaded;
-            loaded.labels = digitize_labels(shape, h);
-            loaded.volume.grid = loaded.labels->grid;
-            loaded.description = name;
-            loaded.h = h;
+            const LoadedVolume loaded = digitized_shape(shape, name, h);
             PipelineOptions options;
             options.solver = SolverKind::Cholmod;
             options.validity = ValidityMode::Off;
