@@ -152,7 +152,7 @@ def test_an_oblique_affine_places_the_labels_as_the_command_line_does_a_nifti(cl
     # dsreg's reading of the file: the same values and LPS affine, so the same mesh.
     values, lps = dsreg.read_volume(path)
     from_arrays = dsreg.regularize(values, affine=lps, multi_label=True, space="ras")
-    assert_same_labels(from_arrays, complex_mesh, label_meshes, atol=1e-12)
+    assert_same_labels(from_arrays, complex_mesh, label_meshes, atol=1e-10)  # the two routes to the affine differ by round-off; the repair solves carry it
     assert from_arrays.coordinate_system == "RAS"
     for mesh in from_arrays.label_meshes.values():
         assert mesh.coordinate_system == "RAS" and signed_volume(mesh) > 0
