@@ -18,11 +18,13 @@
 #include "dsreg/volume_io.hpp"
 #include "dsreg/world_space.hpp"
 #include "medical_test_support.hpp"
+#include "test_support.hpp"
 
 namespace dsreg {
 namespace {
 
 using test::ScratchFolder;
+using test::error_of;
 
 /// The formats whose boxes are read: dsreg's decoders (stored and compressed payloads) and ITK's
 /// slab reader (HDF5, VTK).
@@ -90,16 +92,6 @@ TEST(MedicalBlocks, ReadingABoxEqualsCroppingTheWholeVolumeWithItsGeometry) {
     }
 }
 
-/// Runs `read` and returns the dsreg::Error's message (empty if nothing was thrown).
-template <typename Read>
-std::string error_of(Read&& read) {
-    try {
-        read();
-    } catch (const Error& error) {
-        return error.what();
-    }
-    return "";
-}
 
 TEST(MedicalBlocks, TruncatedFilesAreRefusedNamingTheFile) {
     ScratchFolder scratch("medical-box-truncated");
