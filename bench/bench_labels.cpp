@@ -8,6 +8,10 @@
 //       quad links instead of junction-aware fairness), and dsreg run once per label (the
 //       issue's baseline), with the share of interface vertices that neighbouring labels share.
 //
+//   dsreg_bench_labels repair [H ...]
+//       The validity repair on the solved complex of sectors and layers (default H = 1 0.5): counts,
+//       rounds, displacement of junction and other vertices, label volumes, junction accuracy.
+//
 //   dsreg_bench_labels blobs --labels N --dims X,Y,Z --radius R [--seed S] [--binary] [--out DIR]
 //       A label map of N random blobs packed in a ball of radius R voxels (blob_values below),
 //       written as a uint16 .raw file, then one run of the pipeline on it (read included) with
@@ -38,6 +42,7 @@
 #include "dsreg/label_shapes.hpp"
 #include "dsreg/label_surface.hpp"
 #include "dsreg/normals.hpp"
+#include "dsreg/validity_repair.hpp"
 #include "dsreg/pipeline.hpp"
 #include "dsreg/regularization.hpp"
 #include "dsreg/text.hpp"
@@ -123,17 +128,22 @@ Row separate_runs(const LabelShape& shape, const LabelVolume& labels, const Digi
     return {"dsreg once per label", a.mean, a.p95, j.mean, j.p95, candidates ? double(shared) / double(candidates) : 0.0};
 }
 
+LoadedVolume digitized_shape(const LabelShape& shape, const std::string& name, double h) {
+    LoadedVolume loaded;
+    loaded.labels = digitize_labels(shape, h);
+    loaded.volume.grid = loaded.labels->grid;
+    loaded.description = name;
+    loaded.h = h;
+    return loaded;
+}
+
 int accuracy(const std::vector<double>& steps) {
     std::printf("| shape | h (ball radius) | faces | junction vertices | method | all: mean | p95 | junctions: mean | p95 | shared |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
     for (const std::string& name : label_shape_names())
         for (const double h : steps) {
             const LabelShape shape = make_label_shape(name);
-            LoadedVolume loaded;
-            loaded.labels = digitize_labels(shape, h);
-            loaded.volume.grid = loaded.labels->grid;
-            loaded.description = name;
-            loaded.h = h;
+            const LoadedVolume loaded = digitized_shape(shape, name, h);
             PipelineOptions options;
             options.solver = SolverKind::Cholmod;
             const PipelineResult result = run_pipeline(loaded, options);
@@ -306,6 +316,56 @@ int blobs(const BlobOptions& o) {
     return 0;
 }
 
+// ---- repair ----------------------------------------------------------------------------------
+
+/// The validity repair on the solved complex of each known partition at each grid step: counts as
+/// solved, rounds, how far junction and other vertices move, every label's volume against its
+/// solved one and its voxels', and the junction accuracy before and after.
+int repair(const std::vector<double>& steps) {
+    std::printf("| shape, h | as solved: pairs / folded | rounds | region | held | moved mean/max, junction vertices | other vertices | label volume after / solved (voxels' ratio) | junctions mean (p95) solved -> repaired | all mean solved -> repaired |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
+    for (const std::string name : {"sectors", "layers"})
+        for (const double h : steps) {
+            const LabelShape shape = make_label_shape(name);
+            const LoadedVolume loaded = digitized_shape(shape, name, h);
+            PipelineOptions options;
+            options.solver = SolverKind::Cholmod;
+            options.validity = ValidityMode::Off;
+            const PipelineResult r = run_pipeline(loaded, options);
+            const ValidityRepairResult repaired =
+                repair_validity(r.surface, r.field.normals, r.weights, r.regularization.positions);
+            const Junctions junctions = find_junctions(r.surface, complex_edges(r.surface));
+            double move[2] = {0, 0}, top[2] = {0, 0};
+            std::int64_t count[2] = {0, 0};
+            for (std::int64_t v = 0; v < r.surface.vertex_count(); ++v) {
+                const int j = junctions.vertex[std::size_t(v)] ? 0 : 1;
+                const double d = (repaired.positions.row(v) - r.regularization.positions.row(v)).norm() / h;
+                move[j] += d, top[j] = std::max(top[j], d), ++count[j];
+            }
+            std::string volumes;
+            const std::vector<std::int64_t> voxels = loaded.labels->voxel_counts();
+            for (const LabelMesh& mesh : label_meshes(r.surface)) {
+                const LabelMeasures before = measure_label(r.surface, mesh, r.regularization.positions, voxels[mesh.label]);
+                const LabelMeasures after = measure_label(r.surface, mesh, repaired.positions, voxels[mesh.label]);
+                char text[96];
+                std::snprintf(text, sizeof text, "%s%lld: %.4f (%.3f)", volumes.empty() ? "" : ", ", (long long)after.value,
+                              after.volume / before.volume, after.volume / after.voxel_volume);
+                volumes += text;
+            }
+            const LabelComplexErrors e0 = label_complex_errors(shape, r.surface, r.regularization.positions);
+            const LabelComplexErrors e1 = label_complex_errors(shape, r.surface, repaired.positions);
+            const ValidityRepairReport& rep = repaired.report;
+            std::printf("| %s, %g | %lld / %lld | %d | %lld | %lld | %.3f / %.2f | %.3f / %.2f | %s | %.3f (%.3f) -> %.3f (%.3f) | %.3f -> %.3f |\n",
+                        name.c_str(), h, (long long)rep.before.intersecting_pairs, (long long)rep.before.folded_faces,
+                        rep.rounds, (long long)rep.region_vertices, (long long)rep.held_vertices,
+                        move[0] / std::max<std::int64_t>(count[0], 1), top[0], move[1] / std::max<std::int64_t>(count[1], 1),
+                        top[1], volumes.c_str(), e0.junctions.mean / h, e0.junctions.p95 / h, e1.junctions.mean / h,
+                        e1.junctions.p95 / h, e0.interfaces.mean / h, e1.interfaces.mean / h);
+            std::fflush(stdout);
+        }
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -316,6 +376,12 @@ int main(int argc, char** argv) {
             for (std::size_t i = 1; i < args.size(); ++i) steps.push_back(std::stod(args[i]));
             if (steps.empty()) steps = {1.0, 0.5, 0.25};
             return accuracy(steps);
+        }
+        if (!args.empty() && args[0] == "repair") {
+            std::vector<double> steps;
+            for (std::size_t i = 1; i < args.size(); ++i) steps.push_back(std::stod(args[i]));
+            if (steps.empty()) steps = {1.0, 0.5};
+            return repair(steps);
         }
         if (!args.empty() && args[0] == "blobs") {
             BlobOptions o;
@@ -338,7 +404,7 @@ int main(int argc, char** argv) {
             if (o.labels < 1 || o.labels > 65535) throw Error("--labels must be in 1..65535");
             return blobs(o);
         }
-        std::cerr << "usage: dsreg_bench_labels accuracy [H ...] | blobs --labels N --dims X,Y,Z --radius R [--seed S] [--binary] [--out DIR] [--input-file PATH]\n";
+        std::cerr << "usage: dsreg_bench_labels accuracy [H ...] | repair [H ...] | blobs --labels N --dims X,Y,Z --radius R [--seed S] [--binary] [--out DIR] [--input-file PATH]\n";
         return 2;
     } catch (const std::exception& e) {
         std::cerr << "dsreg_bench_labels: " << e.what() << '\n';

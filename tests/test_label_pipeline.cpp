@@ -38,7 +38,7 @@ LoadedVolume loaded_labels(LabelVolume labels, const std::string& description) {
 }
 
 /// The exact solve, unchecked: the tests below measure the regularization of the complex (the
-/// validity check has its own test, LabelMapsAreCheckedAndTheRepairMakesEveryLabelAValidSolid).
+/// validity repair has its own test, LabelMapsAreRepairedIntoValidSolidsThatKeepTheirVolumes).
 PipelineOptions cholmod_options() {
     PipelineOptions options;
     options.solver = SolverKind::Cholmod;
@@ -218,11 +218,13 @@ TEST(LabelPipeline, VerticesLieOnTheTrueInterfacesAndJunctionCurves) {
     }
 }
 
-TEST(LabelPipeline, LabelMapsAreCheckedAndTheRepairMakesEveryLabelAValidSolid) {
-    // At h = 1 the solve folds faces at the junctions and lets thin layers cross (sectors: 25
-    // intersecting pairs, 23 folded faces; layers: 15 and 32). The pipeline counts them (label
-    // maps are checked, not repaired, by default: docs/multi-label.md); the repair on the complex
-    // makes each label's closed surface a valid solid on its own.
+TEST(LabelPipeline, LabelMapsAreRepairedIntoValidSolidsThatKeepTheirVolumes) {
+    // At h = 1 the solve folds faces at the junctions and lets thin layers cross (sectors: 26
+    // intersecting pairs, 20 folded faces; layers: 10 and 17). The pipeline repairs the complex by
+    // default, and each label's closed surface is a valid solid on its own. The repair spreads
+    // from a junction into the sheets that meet there (its rings cross every edge, not only the
+    // junction-aware fairness links, which give a junction point none), so it takes few rounds
+    // and each label keeps its solved volume within 0.5 % (docs/multi-label.md).
     for (const std::string name : {"sectors", "layers"}) {
         SCOPED_TRACE(name);
         PipelineOptions defaults;
@@ -230,22 +232,28 @@ TEST(LabelPipeline, LabelMapsAreCheckedAndTheRepairMakesEveryLabelAValidSolid) {
         const PipelineResult result = run_shape(name, 1.0, defaults);
         ASSERT_TRUE(result.validity.has_value());
         EXPECT_GT(result.validity->before.intersecting_pairs + result.validity->before.folded_faces, 0);
-        EXPECT_EQ(result.validity->rounds, 0);
-        const MeshValidity as_solved = check_mesh_validity(result.regularization.positions, result.surface.quads, result.field.normals);
-        EXPECT_EQ(as_solved.intersecting_pairs, result.validity->before.intersecting_pairs);
-        EXPECT_EQ(as_solved.folded_faces, result.validity->before.folded_faces);
-
-        const ValidityRepairResult repaired =
-            repair_validity(result.surface, result.field.normals, result.weights, result.regularization.positions);
-        EXPECT_GT(repaired.report.rounds, 0);
-        EXPECT_TRUE(repaired.report.after.valid());
-        EXPECT_TRUE(check_mesh_validity(repaired.positions, result.surface.quads, repaired.normals).valid());
-        for (const LabelMesh& own : label_meshes(result.surface)) {
-            const PolygonMesh mesh = label_polygon_mesh(own, repaired.positions, PointMatrix());
+        EXPECT_GT(result.validity->rounds, 0);
+        EXPECT_LE(result.validity->rounds, 5);
+        EXPECT_TRUE(result.validity->after.valid());
+        EXPECT_TRUE(check_mesh_validity(result.regularization.positions, result.surface.quads, result.field.normals).valid());
+        for (const LabelMesh& own : result.label_meshes) {
+            const PolygonMesh mesh = label_polygon_mesh(own, result.regularization.positions, PointMatrix());
             expect_closed_manifold(mesh);
             const MeshValidity validity = check_mesh_validity(mesh.vertices, mesh.faces);
             EXPECT_EQ(validity.intersecting_pairs, 0) << "label " << own.label;
             EXPECT_EQ(validity.degenerate_triangles, 0) << "label " << own.label;
+        }
+
+        PipelineOptions checked = defaults;
+        checked.validity = ValidityMode::Check;
+        const PipelineResult solved = run_shape(name, 1.0, checked);
+        EXPECT_EQ(solved.validity->rounds, 0);
+        EXPECT_EQ(solved.validity->before.intersecting_pairs, result.validity->before.intersecting_pairs);
+        EXPECT_EQ(solved.validity->before.folded_faces, result.validity->before.folded_faces);
+        ASSERT_EQ(solved.label_measures.size(), result.label_measures.size());
+        for (std::size_t k = 0; k < result.label_measures.size(); ++k) {
+            SCOPED_TRACE("label " + std::to_string(result.label_measures[k].value));
+            EXPECT_NEAR(result.label_measures[k].volume / solved.label_measures[k].volume, 1.0, 0.005);
         }
     }
 }

@@ -25,6 +25,8 @@
 //    E' is minimized over the free vertices of U within `window_rings` of them, everything else
 //    held (the rows of R and b of eq. 22 plus the terms above, each connected part of the
 //    window solved exactly by sparse Cholesky).
+//    Rings are taken across every edge of the mesh (on a label complex, from a junction vertex
+//    into the sheets that meet there, which the junction-aware fairness links leave out).
 //  * A face whose u points into the object or nearly along the face (u·n_s < `field_margin`, n_s
 //    its surfel's outward axis normal, which the voxels make certain) cannot be unfolded by
 //    pulling vertices to their digital positions, where its normal is n_s. When such a face is

@@ -119,11 +119,6 @@ void check_and_repair(const PipelineOptions& o, PipelineResult& result, StageClo
     result.validity = repaired.report;
     clock.finish(validity_text(*result.validity, result.weights));
 }
-PipelineOptions checked_only_for_labels(const PipelineOptions& o, const LoadedVolume& loaded) {
-    PipelineOptions checked = o;
-    if (loaded.labels && checked.validity == ValidityMode::Repair) checked.validity = ValidityMode::Check;
-    return checked;
-}
 
 std::int64_t labelled_voxels(const LabelVolume& labels) {
     return static_cast<std::int64_t>(std::count_if(labels.labels.begin(), labels.labels.end(), [](std::uint32_t l) { return l != 0; }));
@@ -175,9 +170,8 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
                  format("%.2e", result.regularization.solve.relative_residual));
     // On a label map, the complex: its junction edges are shared by three faces or more, which
     // meet there by index (mesh_validity.hpp); each label's surface is a subset of its faces.
-    // On a complex the repair pulls junction vertices off their curves and thin labels lose 3-8 %
-    // of their volume (docs/multi-label.md): label maps are checked, not repaired, for now.
-    if (o.validity != ValidityMode::Off) check_and_repair(checked_only_for_labels(o, loaded), result, clock);
+    // The repair spreads from a junction into the sheets that meet there (docs/multi-label.md).
+    if (o.validity != ValidityMode::Off) check_and_repair(o, result, clock);
     result.faces_against_field =
         count_faces_against_field(result.regularization.positions, result.surface.quads, result.field.normals);
     if (loaded.labels) {

@@ -68,6 +68,30 @@ std::vector<std::int32_t> unique_vertices_of(const FaceMatrix& quads, const std:
     return vertices;
 }
 
+/// The neighbours of each vertex across every edge of the mesh, both ways, in increasing order.
+/// On a closed manifold (any binary volume) these are the quad links; on a label complex they
+/// also give a junction vertex its neighbours in the sheets, which the junction-aware fairness
+/// links leave out (a junction point has no link at all): the region and the graded weights of
+/// the repair must spread from a junction into the sheets that meet there.
+VertexLinks edge_neighbours(const FaceMatrix& quads, std::int64_t vertex_count) {
+    std::vector<std::vector<std::int32_t>> around(static_cast<std::size_t>(vertex_count));
+    for (Eigen::Index f = 0; f < quads.rows(); ++f)
+        for (int e = 0; e < 4; ++e) {
+            const std::int32_t a = quads(f, e), b = quads(f, (e + 1) % 4);
+            around[std::size_t(a)].push_back(b);
+            around[std::size_t(b)].push_back(a);
+        }
+    VertexLinks links;
+    links.offsets.assign(static_cast<std::size_t>(vertex_count + 1), 0);
+    for (std::size_t v = 0; v < around.size(); ++v) {
+        std::sort(around[v].begin(), around[v].end());
+        around[v].erase(std::unique(around[v].begin(), around[v].end()), around[v].end());
+        links.offsets[v + 1] = links.offsets[v] + std::int64_t(around[v].size());
+        links.neighbors.insert(links.neighbors.end(), around[v].begin(), around[v].end());
+    }
+    return links;
+}
+
 /// Vertices within `rings` rings of `seeds` (seeds included) that pass `keep`, sorted.
 template <class Keep>
 std::vector<std::int32_t> rings_around(const VertexLinks& links, const std::vector<std::int32_t>& seeds, int rings,
@@ -103,6 +127,7 @@ public:
     Repair(const DigitalSurface& surface, const PointMatrix& normals, const RegularizationWeights& weights,
            const PointMatrix& positions, const ValidityRepairOptions& options)
         : surface_(surface), weights_(weights), o_(options), links_(fairness_links(surface)),
+          neighbours_(edge_neighbours(surface.quads, surface.vertex_count())),
           input_field_(normals), field_(normals), targets_(repair_targets(surface, options.split_offset)),
           x_(flatten_points(positions)), factor_(std::size_t(surface.vertex_count()), 1.0),
           held_(std::size_t(surface.vertex_count()), 0), in_region_(std::size_t(surface.vertex_count()), 0),
@@ -125,9 +150,9 @@ public:
         refield = correct_field(validity.folded, report);
         const std::vector<std::int32_t> invalid = unique_vertices_of(surface_.quads, validity.invalid_faces());
         const std::vector<std::int32_t> strengthened = strengthen(invalid);
-        for (const std::int32_t v : rings_around(links_, strengthened, o_.region_rings, mark_, [](std::int32_t) { return true; }))
+        for (const std::int32_t v : rings_around(neighbours_, strengthened, o_.region_rings, mark_, [](std::int32_t) { return true; }))
             in_region_[std::size_t(v)] = 1;
-        solve(rings_around(links_, strengthened, o_.window_rings, mark_, [&](std::int32_t v) { return free_in_region(v); }),
+        solve(rings_around(neighbours_, strengthened, o_.window_rings, mark_, [&](std::int32_t v) { return free_in_region(v); }),
               report);
         report.solve_seconds += seconds_since(started);
     }
@@ -230,8 +255,8 @@ private:
         for (int ring = 0; ring < o_.grade_rings; ++ring) {
             std::vector<std::int32_t> next;
             for (const std::int32_t v : frontier)
-                for (std::int64_t k = links_.offsets[std::size_t(v)]; k < links_.offsets[std::size_t(v) + 1]; ++k) {
-                    const std::int32_t w = links_.neighbors[std::size_t(k)];
+                for (std::int64_t k = neighbours_.offsets[std::size_t(v)]; k < neighbours_.offsets[std::size_t(v) + 1]; ++k) {
+                    const std::int32_t w = neighbours_.neighbors[std::size_t(k)];
                     const double graded = factor_[std::size_t(v)] / o_.alpha_grade;
                     if (graded <= std::max(factor_[std::size_t(w)], 1.0)) continue;
                     factor_[std::size_t(w)] = graded;
@@ -379,7 +404,8 @@ private:
     const DigitalSurface& surface_;
     const RegularizationWeights& weights_;
     ValidityRepairOptions o_;
-    VertexLinks links_;
+    VertexLinks links_;       ///< of the fairness term (E)
+    VertexLinks neighbours_;  ///< across every edge: the rings of the region and of the grading
     PointMatrix input_field_, field_;
     PointMatrix targets_;
     Eigen::VectorXd x_;

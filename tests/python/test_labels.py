@@ -204,7 +204,7 @@ def test_progress_reports_the_label_stage():
     stages = []
     dsreg.regularize(sectors(), multi_label=True, progress=lambda stage, fraction: stages.append(stage))
     assert stages[0] == "read" and "labels" in stages
-    assert stages.index("validity") < stages.index("labels")  # the complex is checked (not repaired), then measured
+    assert stages.index("validity") < stages.index("labels")  # the complex is checked and repaired, then measured
 
 
 def test_a_binary_run_has_no_labels():
