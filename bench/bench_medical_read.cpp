@@ -6,6 +6,11 @@
 //   dsreg_bench_medical_read values FILE      read_volume_values: 4 bytes per voxel
 //   dsreg_bench_medical_read itk FILE         ITK's NiftiImageIO reading the whole image into
 //                                             its buffer (what itk::ImageFileReader does)
+//   dsreg_bench_medical_read dims FILE        read_volume_dims: the header alone (the process's
+//                                             own memory, for the figures of the others)
+//   dsreg_bench_medical_read boxes FILE [B]   read_volume_box of every B³ block (default 64) in
+//                                             turn, as a block-wise run reads them (any format
+//                                             read_volume_box reads: .nii, .nii.gz, .h5, ...)
 // Each prints its wall time; bench/medical_read.sh runs them under hyperfine and /usr/bin/time
 // for the figures of docs/benchmarks.md.
 #include <chrono>
@@ -16,6 +21,7 @@
 #include <vector>
 
 #include "../src/volume/itk_bridge.hpp"
+#include "dsreg/blocks.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/volume_io.hpp"
 
@@ -45,7 +51,7 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 
 int main(int argc, char** argv) {
     if (argc < 3) {
-        std::fprintf(stderr, "usage: %s write|dsreg|values|itk FILE [N]\n", argv[0]);
+        std::fprintf(stderr, "usage: %s write|dsreg|values|itk|dims|boxes FILE [N|B]\n", argv[0]);
         return 2;
     }
     const std::string mode = argv[1], path = argv[2];
@@ -63,6 +69,18 @@ int main(int argc, char** argv) {
         } else if (mode == "values") {
             const ScalarVolume volume = read_volume_values(path);
             std::printf("%zu values\n", volume.values.size());
+        } else if (mode == "dims") {
+            const Index3 dims = read_volume_dims(path);
+            std::printf("%lldx%lldx%lld voxels\n", static_cast<long long>(dims[0]), static_cast<long long>(dims[1]),
+                        static_cast<long long>(dims[2]));
+        } else if (mode == "boxes") {
+            const std::int64_t b = argc > 3 ? std::stoll(argv[3]) : 64;
+            const BlockLayout layout = blocks_of_size(read_volume_dims(path), {b, b, b});
+            std::int64_t object = 0;
+            for (std::int64_t block = 0; block < layout.block_count(); ++block)
+                object += read_volume_box(path, layout.box(block)).object_voxel_count();
+            std::printf("%lld object voxels in %lld boxes\n", static_cast<long long>(object),
+                        static_cast<long long>(layout.block_count()));
         } else if (mode == "itk") {
             volume_io_detail::ItkImageReader reader(path, volume_io_detail::ItkFormat::Nifti);
             const auto& sizes = reader.header().sizes;

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "dsreg/blocks.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/implicit_shape.hpp"
 #include "dsreg/label_surface.hpp"
@@ -145,8 +146,34 @@ void check_label_map(const char* target, const std::string& path, const RawVolum
     FUZZ_CHECK(target, std::int64_t(links.offsets.size()) == complex.vertex_count() + 1, "links of the wrong size");
 }
 
+/// A block-wise run's reads of an accepted file: the header probe gives its grid, and a box (the
+/// upper corner, half the grid along each axis) the crop of the whole mask, placed at its corner.
+void check_box_read(const char* target, const std::string& path, const RawVolumeLayout* layout, const BinaryVolume& volume) {
+    const VoxelGrid& g = volume.grid;
+    const VoxelGrid header = read_volume_grid(path, layout);
+    FUZZ_CHECK(target, header.dims == g.dims && header.spacing == g.spacing && header.origin == g.origin &&
+                           header.direction == g.direction,
+               "read_volume_grid disagrees with read_volume's grid");
+    const VoxelBox box{{g.dims[0] / 2, g.dims[1] / 2, g.dims[2] / 2}, g.dims};
+    const BinaryVolume part = read_volume_box(path, box, ValueRange{}, layout);
+    FUZZ_CHECK(target, part.mask == crop_volume(volume, VoxelBox{{0, 0, 0}, g.dims}, box).mask,
+               "read_volume_box differs from the crop of read_volume");
+    FUZZ_CHECK(target, part.grid.origin == g.voxel_center(box.lo[0], box.lo[1], box.lo[2]), "the box is not placed at its corner");
+}
+
+/// A box read of a refused file refuses it too, or reads a box without the broken part; either
+/// way no crash, and any message starts with the path.
+void check_box_read_of_refused(const char* target, const std::string& path, const RawVolumeLayout* layout) {
+    try {
+        read_volume_box(path, VoxelBox{{0, 0, 0}, {1, 1, 1}}, ValueRange{}, layout);
+    } catch (const Error& error) {
+        const std::string message = error.what();
+        FUZZ_CHECK(target, message.rfind(path + ": ", 0) == 0, "box read message does not start with the path: " + message);
+    }
+}
+
 /// Reads the file both ways (mask and values), checks they agree, and extracts the digital
-/// surface of small non-empty volumes; then as a label map.
+/// surface of small non-empty volumes; then as a label map, and by boxes as block-wise runs do.
 Outcome read_volume_file(const char* target, const std::string& path, const RawVolumeLayout* layout) {
     Outcome outcome;
     BinaryVolume volume;
@@ -163,6 +190,7 @@ Outcome read_volume_file(const char* target, const std::string& path, const RawV
             values_failed = true;
         }
         FUZZ_CHECK(target, values_failed, "read_volume failed but read_volume_values succeeded: " + outcome.message);
+        check_box_read_of_refused(target, path, layout);
         return outcome;
     }
     outcome.accepted = true;
@@ -186,6 +214,7 @@ Outcome read_volume_file(const char* target, const std::string& path, const RawV
         check_surface(target, extract_digital_surface(volume, c));
     }
     check_label_map(target, path, layout, values);
+    check_box_read(target, path, layout, volume);
     return outcome;
 }
 

@@ -407,11 +407,11 @@ TEST(Blocks, OptionsThatNeedTheWholeSurfaceAreRefused) {
     VolumeSource limited = source;  // the --max-memory estimate is the whole-volume run's
     limited.max_memory = "4G";
     EXPECT_THROW(run_pipeline(limited, options), Error);
-    VolumeSource nifti;  // its reader holds the whole volume: refused before the file is opened
-    nifti.input_path = "no-such-volume.nii.gz";
+    VolumeSource series;  // a folder is a DICOM series, whose reader holds the slices: refused
+    series.input_path = fresh_folder("series").string();
     try {
-        run_pipeline(nifti, options);
-        ADD_FAILURE() << "a NIfTI file was accepted for a block-wise run";
+        run_pipeline(series, options);
+        ADD_FAILURE() << "a DICOM series was accepted for a block-wise run";
     } catch (const Error& error) {
         EXPECT_NE(std::string(error.what()).find("block-wise runs"), std::string::npos) << error.what();
     }

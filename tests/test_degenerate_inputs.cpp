@@ -27,17 +27,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// The message of the dsreg::Error thrown by `f`, or "" (test failure) if none is thrown.
-template <typename F>
-std::string error_of(F&& f) {
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    ADD_FAILURE() << "no dsreg::Error thrown";
-    return "";
-}
+using test::error_of;
 
 /// A fresh folder for one test's files.
 fs::path scratch_folder(const std::string& name) {

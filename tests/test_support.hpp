@@ -17,6 +17,18 @@
 
 namespace dsreg::test {
 
+/// The message of the dsreg::Error thrown by `f`, or "" (test failure) if none is thrown.
+template <typename F>
+std::string error_of(F&& f) {
+    try {
+        f();
+    } catch (const Error& e) {
+        return e.what();
+    }
+    ADD_FAILURE() << "no dsreg::Error thrown";
+    return "";
+}
+
 /// A volume of `dims` voxels (spacing 1, origin 0) whose object is {(i,j,k) : inside(i,j,k)}.
 inline BinaryVolume make_volume(const Index3& dims, const std::function<bool(double, double, double)>& inside) {
     BinaryVolume v;

@@ -97,8 +97,8 @@ LoadedVolume load_volume(const VolumeSource& source);
 constexpr double kMostOfTheVolume = 0.5;
 
 /// What the pipeline knows of a volume before reading its voxels, for block-wise runs: the
-/// LoadedVolume that load_volume would return, with an empty mask (grid, description, shape, h
-/// set), from the file's header alone or the shape's digitization grid (arrays are refused). --max-memory is not
+/// LoadedVolume that load_volume would return, with an empty mask (grid with its world geometry,
+/// file info, description, shape, h set), from the file's header alone or the shape's digitization grid (arrays are refused). --max-memory is not
 /// applied (block-wise runs never hold the whole mask). Throws dsreg::Error as load_volume does.
 LoadedVolume probe_volume(const VolumeSource& source);
 

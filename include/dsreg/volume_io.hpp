@@ -109,17 +109,28 @@ BinaryVolume read_raw(const std::string& path, const RawVolumeLayout& layout, co
 BinaryVolume read_volume(const std::string& path, const ValueRange& range = {}, const RawVolumeLayout* raw_layout = nullptr,
                          const VolumeLimits& limits = {}, VolumeFileInfo* info = nullptr);
 
-/// The dimensions of a volume file (what read_volume gives as grid.dims), from its header alone,
-/// after the same checks of the header against the file size. Any format read_volume accepts.
+/// The grid of a volume file (what read_volume gives as grid: dims, spacing, origin, direction)
+/// from its header alone, after the same checks of the header against the file size; `info`, if
+/// given, receives the format, value type and whether the file has a world geometry. The
+/// formats read_volume_box reads (every format but a DICOM series).
+VoxelGrid read_volume_grid(const std::string& path, const RawVolumeLayout* raw_layout = nullptr, const VolumeLimits& limits = {},
+                           VolumeFileInfo* info = nullptr);
+/// read_volume_grid(...).dims.
 Index3 read_volume_dims(const std::string& path, const RawVolumeLayout* raw_layout = nullptr, const VolumeLimits& limits = {});
 
 /// The voxels of `box` of a volume file (a non-empty box inside its grid), as read_volume would
-/// give them, with memory for the box alone: grid.dims = box.size(), spacing (1,1,1), origin
-/// (0,0,0) (place it with the box). Stored payloads (.raw, .vol and .longvol version 2, binary
-/// .pgm3d) are read by offsets, row by row of the box; zlib and ASCII payloads are decoded from
-/// the start, keeping the box (the time of the whole file, the memory of the box). The header
-/// and payload size checks are those of read_volume; values outside the box are not decoded,
-/// so not checked (e.g. against a PGM maxval). Throws dsreg::Error naming the file.
+/// give them, with memory for the box alone (plus, for formats ITK decodes, a slab of at most
+/// 16 MiB of whole x-y slices): grid.dims = box.size(), the file's spacing and direction, and
+/// the origin of the file's grid frame moved to voxel box.lo (origin + spacing ⊙ box.lo).
+/// Stored payloads (.raw, .vol and .longvol version 2, binary .pgm3d, .nii, .hdr/.img, raw
+/// NRRD and MetaImage, .npy) are read from the offset of the box's first x-y slice to the end of
+/// its last; zlib, gzip and ASCII payloads (.nii.gz, gzip NRRD, compressed MetaImage) are decoded
+/// from the start, keeping the box (the time of the file up to the box, the memory of the box).
+/// HDF5, VTK and the other images ITK reads by slices (ImageIO::CanStreamRead) are read slab by
+/// slab over the box's slices; TIFF and DICOM files, which ITK reads whole, and DICOM series are
+/// refused (block-wise runs would hold the whole image). The header and payload size checks
+/// are those of read_volume; values outside the box are not decoded, so not checked (e.g.
+/// against a PGM maxval). Label maps are read whole. Throws dsreg::Error naming the file.
 BinaryVolume read_volume_box(const std::string& path, const VoxelBox& box, const ValueRange& range = {},
                              const RawVolumeLayout* raw_layout = nullptr, const VolumeLimits& limits = {});
 

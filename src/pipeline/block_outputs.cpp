@@ -24,6 +24,7 @@ PipelineResult welded_pipeline_result(WeldedRun run, const BlockPlan& plan) {
     PipelineResult r;
     r.input = plan.header.description;
     r.grid = plan.header.volume.grid;
+    r.file = plan.header.file;  // the world geometry the meshes are written in (--space)
     r.object_voxels = run.object_voxels;
     r.surface = std::move(run.welded.surface);
     r.field = std::move(run.field);

@@ -377,7 +377,7 @@ LoadedVolume probe_volume(const VolumeSource& o) {
     VolumeLimits limits;
     limits.max_voxels = o.max_voxels;
     LoadedVolume loaded;
-    loaded.volume.grid.dims = read_volume_dims(o.input_path, o.raw_layout ? &*o.raw_layout : nullptr, limits);
+    loaded.volume.grid = read_volume_grid(o.input_path, o.raw_layout ? &*o.raw_layout : nullptr, limits, &loaded.file);
     loaded.description = o.input_path;
     apply_spacing(o, loaded.volume.grid);
     loaded.h = loaded.volume.grid.spacing.maxCoeff();
@@ -389,9 +389,10 @@ BinaryVolume load_volume_box(const VolumeSource& o, const LoadedVolume& header, 
     VolumeLimits limits;
     limits.max_voxels = o.max_voxels;
     BinaryVolume volume = read_volume_box(o.input_path, box, object_range(o), o.raw_layout ? &*o.raw_layout : nullptr, limits);
-    const VoxelGrid& grid = header.volume.grid;
+    const VoxelGrid& grid = header.volume.grid;  // the file's, with --spacing applied
     volume.grid.spacing = grid.spacing;
     volume.grid.origin = grid.voxel_center(box.lo[0], box.lo[1], box.lo[2]);
+    volume.grid.direction = grid.direction;
     return volume;
 }
 

@@ -59,9 +59,10 @@ void read_image_payload(const std::string& path, ItkFormat format, const Payload
     info.value_type = layout.value_type;
     info.world_geometry = true;
     const VoxelGrid geometry = image_geometry(path, itk, info);
-    if (!destination.allocate(path, dims)) return;
+    const bool wanted = destination.allocate(path, dims);
     destination.set_geometry(geometry);
     destination.info() = info;
+    if (!wanted) return;
     SampleWriter sink = destination.writer(data.path(), layout.sample);
     if (!layout.compressed) return decode_stored_prefix(data, sink);
     InflateStream stream(data, layout.container);

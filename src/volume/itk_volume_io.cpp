@@ -37,9 +37,10 @@ std::vector<std::uint8_t> allocate_buffer(const std::string& path, std::uint64_t
 }
 
 /// Checks of every image ITK decodes: 3-D scalar, within the limits, not larger than its files
-/// can hold. Allocates the destination with the image's geometry; returns the dims.
-Index3 prepare_destination(const std::string& path, const ImageHeader& header, const std::vector<std::string>& files,
-                           const VolumeLimits& limits, VoxelDestination& destination) {
+/// can hold. Allocates the destination with the image's geometry; returns whether the voxels
+/// are wanted (not for a header-only destination).
+bool prepare_destination(const std::string& path, const ImageHeader& header, const std::vector<std::string>& files,
+                         const VolumeLimits& limits, VoxelDestination& destination) {
     const Index3 dims = image_dims(path, header);
     const std::int64_t voxels = checked_voxel_count(path, dims, limits);
     const std::uint64_t bytes = payload_bytes(path, voxels, header.sample.bytes);
@@ -50,10 +51,17 @@ Index3 prepare_destination(const std::string& path, const ImageHeader& header, c
     info.value_type = header.value_type;
     info.world_geometry = header.format != itk_format_name(ItkFormat::Tiff);  // TIFF has no origin nor direction
     const VoxelGrid geometry = image_geometry(path, header, info);
-    destination.allocate(path, dims);  // never header-only: read_volume_dims reads .vol, .longvol, .pgm3d, .raw only
+    const bool wanted = destination.allocate(path, dims);
     destination.set_geometry(geometry);
     destination.info() = info;
-    return dims;
+    return wanted;
+}
+
+/// The slices [first, end) of the stream a read needs: those of the box, or all.
+std::pair<std::int64_t, std::int64_t> needed_slices(const VoxelDestination& destination) {
+    const StreamRegion* region = destination.region();
+    if (region == nullptr) return {0, destination.dims()[2]};
+    return {region->box.lo[2], region->box.hi[2]};
 }
 
 }  // namespace
@@ -62,15 +70,22 @@ void read_itk_voxels(const std::string& path, ItkFormat format, const VolumeLimi
     { const InputFile check(path); }  // a clear message for a missing file, a folder, a device
     ItkImageReader reader(path, format);
     const ImageHeader& header = reader.header();
-    const Index3 dims = prepare_destination(path, header, {path}, limits, destination);
+    if (!prepare_destination(path, header, {path}, limits, destination)) return;
+    const Index3& dims = destination.dims();
     // Formats ITK cannot stream (TIFF, DICOM files) are read in one region: a buffer of the whole
-    // image in its own value type, for the time of the read.
+    // image in its own value type, for the time of the read. A box of them is refused: a
+    // block-wise run would hold the whole image once per block.
+    if (destination.region() != nullptr && !reader.can_stream())
+        fail(path, "block-wise runs (--block-size, dsreg-mpi) read a box of the images ITK reads by slices, and ITK reads "
+                   "this " + header.format + " file whole; convert it to .nii, .h5 or .raw (or run without --block-size)");
     const auto value_bytes = static_cast<std::uint64_t>(header.sample.bytes);
     const std::int64_t slab = reader.can_stream() ? slab_slices(dims, value_bytes) : dims[2];
     std::vector<std::uint8_t> buffer = allocate_buffer(path, static_cast<std::uint64_t>(dims[0] * dims[1] * slab) * value_bytes);
     SampleWriter sink = destination.writer(path, header.sample);
-    for (std::int64_t first = 0; first < dims[2]; first += slab) {
-        const std::int64_t count = std::min(slab, dims[2] - first);
+    const auto [first_slice, end_slice] = needed_slices(destination);
+    sink.skip_to(static_cast<std::uint64_t>(dims[0] * dims[1] * first_slice));
+    for (std::int64_t first = first_slice; first < end_slice; first += slab) {
+        const std::int64_t count = std::min(slab, end_slice - first);
         reader.read_slices(first, count, buffer.data());
         sink.consume(buffer.data(), static_cast<std::size_t>(static_cast<std::uint64_t>(dims[0] * dims[1] * count) * value_bytes));
     }
@@ -79,7 +94,8 @@ void read_itk_voxels(const std::string& path, ItkFormat format, const VolumeLimi
 void read_dicom_series_voxels(const std::string& folder, const VolumeLimits& limits, VoxelDestination& destination) {
     DicomSeriesReader reader(folder);
     const ImageHeader& header = reader.header();
-    const Index3 dims = prepare_destination(folder, header, reader.files(), limits, destination);
+    if (!prepare_destination(folder, header, reader.files(), limits, destination)) return;
+    const Index3& dims = destination.dims();
     destination.info().notes.push_back(std::to_string(reader.files().size()) + " DICOM files");
     const std::int64_t slab = slab_slices(dims, sizeof(double));
     std::vector<double> buffer(static_cast<std::size_t>(dims[0] * dims[1] * slab));

@@ -491,9 +491,10 @@ void read_nifti_voxels(const std::string& path, const VolumeLimits& limits, Voxe
     info.value_type = parsed.value_type;
     info.world_geometry = true;
     const VoxelGrid geometry = nifti_grid(header_path, parsed, info);
-    if (!destination.allocate(path, parsed.dims)) return;
+    const bool wanted = destination.allocate(path, parsed.dims);
     destination.set_geometry(geometry);
     destination.info() = info;
+    if (!wanted) return;
 
     if (same_file) return decode_payload(data, parsed, bytes.size(), header_stream.get(), description, destination);
     std::unique_ptr<InflateStream> data_stream;

@@ -602,9 +602,13 @@ void require_exact_payload(const InputFile& file, std::uint64_t expected_bytes, 
 }
 
 void decode_stored_prefix(InputFile& file, SampleWriter& sink) {
+    if (const StreamRegion* region = sink.region()) {  // a box: seek to its first slice
+        file.skip(region->first_needed() * static_cast<std::uint64_t>(sink.sample_bytes()));
+        sink.skip_to(region->first_needed());
+    }
     std::vector<std::uint8_t> chunk(std::size_t(1) << 20);
-    while (!sink.complete()) {
-        const std::uint64_t missing = sink.bytes_missing();
+    while (sink.bytes_needed() > 0) {
+        const std::uint64_t missing = sink.bytes_needed();
         const std::size_t got = file.read(chunk.data(), static_cast<std::size_t>(std::min<std::uint64_t>(chunk.size(), missing)));
         if (got == 0)
             file.fail("truncated payload: the file ended (or could not be read) after " + std::to_string(sink.samples_written()) +
@@ -615,7 +619,7 @@ void decode_stored_prefix(InputFile& file, SampleWriter& sink) {
 
 void decode_stored_payload(InputFile& file, SampleWriter& sink) {
     decode_stored_prefix(file, sink);
-    if (file.peek() != -1) file.fail("trailing bytes after the payload (the file grew while being read?)");
+    if (sink.complete() && file.peek() != -1) file.fail("trailing bytes after the payload (the file grew while being read?)");
 }
 
 void check_writer_input(const std::string& path, const Index3& dims, std::size_t value_count) {
@@ -705,23 +709,28 @@ BinaryVolume read_volume(const std::string& path, const ValueRange& range, const
 namespace {
 
 /// Box reads and header probes exist for the formats whose readers honour a region and a
-/// header-only destination; the others would read (or allocate) the whole volume.
+/// header-only destination: all but a DICOM series (its reader holds the slices ITK reads).
+/// The ITK reader refuses a box of the images ITK cannot read by slices (TIFF, DICOM files).
 void require_block_format(const std::string& path) {
     using volume_io_detail::VolumeFormat;
-    const VolumeFormat format = volume_io_detail::volume_format(path);
-    if (format != VolumeFormat::Vol && format != VolumeFormat::Longvol && format != VolumeFormat::Pgm3d &&
-        format != VolumeFormat::Raw)
-        volume_io_detail::fail(path, "block-wise runs (--block-size, dsreg-mpi) read .vol, .longvol, .pgm3d and .raw "
-                                     "files only; convert this file to .raw (or run dsreg regularize without --block-size)");
+    if (volume_io_detail::volume_format(path) == VolumeFormat::DicomSeries)
+        volume_io_detail::fail(path, "block-wise runs (--block-size, dsreg-mpi) do not read DICOM series; convert the "
+                                     "series to .nii or .raw (or run dsreg regularize without --block-size)");
 }
 
 }  // namespace
 
-Index3 read_volume_dims(const std::string& path, const RawVolumeLayout* raw_layout, const VolumeLimits& limits) {
+VoxelGrid read_volume_grid(const std::string& path, const RawVolumeLayout* raw_layout, const VolumeLimits& limits,
+                           VolumeFileInfo* info) {
     require_block_format(path);
     auto destination = volume_io_detail::VoxelDestination::header_only();
     volume_io_detail::read_volume_voxels(path, raw_layout, limits, destination);
-    return destination.dims();
+    if (info != nullptr) *info = destination.info();
+    return destination.take_mask().grid;
+}
+
+Index3 read_volume_dims(const std::string& path, const RawVolumeLayout* raw_layout, const VolumeLimits& limits) {
+    return read_volume_grid(path, raw_layout, limits).dims;
 }
 
 BinaryVolume read_volume_box(const std::string& path, const VoxelBox& box, const ValueRange& range,
@@ -730,7 +739,9 @@ BinaryVolume read_volume_box(const std::string& path, const VoxelBox& box, const
     auto destination = volume_io_detail::VoxelDestination::mask(range);
     destination.restrict_to(box);
     volume_io_detail::read_volume_voxels(path, raw_layout, limits, destination);
-    return destination.take_mask();
+    BinaryVolume volume = destination.take_mask();
+    volume.grid.origin += volume.grid.spacing.cwiseProduct(Eigen::Vector3d(double(box.lo[0]), double(box.lo[1]), double(box.lo[2])));
+    return volume;
 }
 
 ScalarVolume read_volume_values(const std::string& path, const RawVolumeLayout* raw_layout, const VolumeLimits& limits,

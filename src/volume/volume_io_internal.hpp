@@ -85,6 +85,10 @@ struct StreamRegion {
 
     /// Index in the box's storage of stream voxel `index`, or −1 outside the box.
     std::int64_t local_index(std::uint64_t index) const;
+    /// The stream voxels [first_needed, end_needed) of the x-y slices the box spans: a box read
+    /// decodes no others (stored payloads seek past the slices before, and stop after).
+    std::uint64_t first_needed() const { return std::uint64_t(dims[0] * dims[1] * box.lo[2]); }
+    std::uint64_t end_needed() const { return std::uint64_t(dims[0] * dims[1] * box.hi[2]); }
 };
 
 /// Label indices of the integer values of a label map, assigned as the values are decoded
@@ -153,6 +157,12 @@ public:
         return (size_ - written_) * static_cast<std::uint64_t>(format_.bytes) - pending_size_;
     }
     bool complete() const { return written_ == size_ && pending_size_ == 0; }
+    /// Bytes still to come before every voxel a box read needs (every voxel without a region)
+    /// has its value.
+    std::uint64_t bytes_needed() const {
+        const std::uint64_t end = has_region_ ? region_.end_needed() : size_;
+        return written_ >= end ? 0 : (end - written_) * static_cast<std::uint64_t>(format_.bytes) - pending_size_;
+    }
 
 private:
     SampleWriter(const std::string& path, SampleFormat format, std::uint64_t size, const StreamRegion* region = nullptr);
@@ -209,9 +219,11 @@ public:
     static VoxelDestination header_only();
 
     /// Keeps only the voxels of `box` (call before allocate(), which checks that the box lies
-    /// in the grid). Only the readers of .vol, .longvol, .pgm3d and .raw honour it
-    /// (read_volume_box refuses the other formats).
+    /// in the grid). Every reader honours it through writer() and set(); the ITK reader refuses
+    /// it for the images ITK cannot read by slices (read_volume_box refuses DICOM series).
     void restrict_to(const VoxelBox& box);
+    /// The region of restrict_to(), or null for the whole grid (valid after allocate()).
+    const StreamRegion* region() const { return has_region_ ? &region_ : nullptr; }
 
     /// Storage for `dims` voxels (spacing 1, origin 0, identity direction), or for the box.
     /// Throws dsreg::Error naming `path` if the memory cannot be allocated or the box is not
@@ -316,9 +328,10 @@ void require_exact_payload(const InputFile& file, std::uint64_t expected_bytes, 
 void require_plausible_zlib_payload(const InputFile& file, std::uint64_t expected_bytes, const std::string& description);
 
 /// Feeds the rest of the file (exactly the expected size, already checked) to `sink`; with a
-/// region, only the rows of its box, each read at its offset.
+/// region, only the x-y slices its box spans, sought at their offset (StreamRegion::first_needed).
 void decode_stored_payload(InputFile& file, SampleWriter& sink);
-/// Feeds the next bytes of the file to `sink` until it is complete; what follows is not read.
+/// Feeds the next bytes of the file to `sink` until it is complete (with a region: until the
+/// slices of its box are, seeking past those before); what follows is not read.
 void decode_stored_prefix(InputFile& file, SampleWriter& sink);
 
 /// Inflates the zlib stream filling the rest of the file into `sink`, with a hard cap at
@@ -348,7 +361,8 @@ public:
     std::size_t read(std::uint8_t* destination, std::size_t count, const std::string& context);
     /// Discards `count` inflated bytes; throws if the stream ends before.
     void skip(std::uint64_t count, const std::string& context);
-    /// Feeds exactly `count` inflated bytes to `sink`; throws if the stream ends before.
+    /// Feeds exactly `count` inflated bytes to `sink` (with a region, only those up to the end of
+    /// its box's last slice: SampleWriter::bytes_needed); throws if the stream ends before.
     void decode(std::uint64_t count, SampleWriter& sink, const std::string& context);
 
     std::uint64_t produced() const { return produced_; }

@@ -114,8 +114,9 @@ void InflateStream::skip(std::uint64_t count, const std::string& context) {
 
 void InflateStream::decode(std::uint64_t count, SampleWriter& sink, const std::string& context) {
     std::vector<std::uint8_t> output(std::size_t(1) << 18);
-    while (count > 0) {
-        const std::size_t piece = static_cast<std::size_t>(std::min<std::uint64_t>(count, output.size()));
+    // A box read stops after the box's last slice (bytes_needed).
+    while (count > 0 && sink.bytes_needed() > 0) {
+        const std::size_t piece = static_cast<std::size_t>(std::min({count, std::uint64_t(output.size()), sink.bytes_needed()}));
         const std::size_t got = read(output.data(), piece, context);
         if (got == 0)
             file_.fail("truncated payload: " + context + ", but the " + name() + " stream inflates to only " +
@@ -147,6 +148,7 @@ void require_plausible_zlib_payload(const InputFile& file, std::uint64_t expecte
 void decode_zlib_payload(InputFile& file, std::uint64_t expected_bytes, SampleWriter& sink, const std::string& description) {
     InflateStream stream(file, CompressedContainer::Zlib);
     stream.decode(expected_bytes, sink, description);
+    if (!sink.complete()) return;  // a box: what follows its last slice is not read
     // Every expected byte is there: the stream may only end now. Probe for one more byte.
     std::uint8_t probe = 0;
     if (stream.read(&probe, 1, description) == 1)
