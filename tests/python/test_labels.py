@@ -172,7 +172,9 @@ def test_labels_keeps_some_and_the_rest_joins_the_background(cli, npy_run):
     result = dsreg.regularize(sectors(), labels=[3, 12])
     assert sorted(result.label_meshes) == [3, 12]
     assert set(np.unique(result.face_labels)) == {0, 3, 12}
-    assert_same_labels(result, complex_mesh, label_meshes)
+    # Equal to round-off: since label maps are repaired, the array and the .npy differ by 1.3e-13
+    # (the repair's arithmetic in another order; the faces and labels are the same).
+    assert_same_labels(result, complex_mesh, label_meshes, atol=1e-11)
     # The kept labels' voxels are those of a map without label 7.
     without_7 = sectors()
     without_7[without_7 == 7] = 0
