@@ -49,6 +49,7 @@ check "error printed once" test "$("$DSREG" "$work/nothing.vol" -o "$work/out.ob
 expect_error "AT normals refused" "--normals at" --shape sphere9 --h 1 --normals at -o "$work/out.obj"
 expect_error "clamp refused" "--clamp" --shape sphere9 --h 1 --clamp -o "$work/out.obj"
 expect_error "streaming refused" "--block-size" --shape sphere9 --h 1 --block-size 8 -o "$work/out.obj"
+expect_error "dsreg-mpi refuses --labels" "--labels" --shape sphere9 --h 1 --labels 1 -o "$work/out.obj"
 expect_error "max-memory refused" "--max-memory" --shape sphere9 --h 1 --max-memory 4G -o "$work/out.obj"
 expect_error "thin-part weights refused" "--alpha-reach" --shape sphere9 --h 1 --alpha-reach 12 -o "$work/out.obj"
 expect_error "bad flag" "--no-such-flag" --shape sphere9 --no-such-flag -o "$work/out.obj"
@@ -77,5 +78,6 @@ expect_error "halo needs blocks" "--block-halo" regularize --shape sphere9 --h 1
 expect_error "block size positive" "--block-size" regularize --shape sphere9 --h 1 --block-size 0 -o "$work/out.obj"
 expect_error "block size 1 or 3 values" "--block-size" regularize --shape sphere9 --h 1 --block-size 4,4 -o "$work/out.obj"
 expect_error "streaming refuses AT" "--normals at" regularize --shape sphere9 --h 1 --block-size 8 --normals at -o "$work/out.obj"
+expect_error "streaming refuses label maps" "--multi-label" regularize --shape sphere9 --h 1 --block-size 8 --multi-label -o "$work/out.obj"
 expect_error "streaming refuses max-memory" "--max-memory" regularize --shape sphere9 --h 1 --block-size 8 --max-memory 4G -o "$work/out.obj"
 finish

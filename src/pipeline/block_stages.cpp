@@ -129,6 +129,9 @@ BlockPlan plan_block_run(const VolumeSource& source, const PipelineOptions& opti
     if (!source.max_memory.empty())
         throw Error("--max-memory cannot be used with " + driver +
                     ": its estimate is that of the whole-volume run (choose the block size instead)");
+    if (source.is_multi_label())
+        throw Error(std::string(source.labels.empty() ? "--multi-label" : "--labels") + " cannot be used with " + driver +
+                    ": label maps are regularized as a whole (run dsreg regularize without --block-size)");
     BlockPlan plan;
     plan.header = probe_volume(source);
     plan.reach = normal_field_reach(options.normals, plan.header);
