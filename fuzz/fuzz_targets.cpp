@@ -146,6 +146,18 @@ void check_label_map(const char* target, const std::string& path, const RawVolum
     FUZZ_CHECK(target, std::int64_t(links.offsets.size()) == complex.vertex_count() + 1, "links of the wrong size");
 }
 
+/// Whether `part` holds exactly the voxels of `box` of `volume` (the fuzz build links the readers
+/// only, not src/blocks' crop_volume).
+bool equals_box_of(const BinaryVolume& part, const BinaryVolume& volume, const VoxelBox& box) {
+    const Index3 size{box.hi[0] - box.lo[0], box.hi[1] - box.lo[1], box.hi[2] - box.lo[2]};
+    if (part.grid.dims != size || part.mask.size() != std::size_t(size[0] * size[1] * size[2])) return false;
+    for (std::int64_t k = 0; k < size[2]; ++k)
+        for (std::int64_t j = 0; j < size[1]; ++j)
+            for (std::int64_t i = 0; i < size[0]; ++i)
+                if (part.inside(i, j, k) != volume.inside(box.lo[0] + i, box.lo[1] + j, box.lo[2] + k)) return false;
+    return true;
+}
+
 /// A block-wise run's reads of an accepted file: the header probe gives its grid, and a box (the
 /// upper corner, half the grid along each axis) the crop of the whole mask, placed at its corner.
 void check_box_read(const char* target, const std::string& path, const RawVolumeLayout* layout, const BinaryVolume& volume) {
@@ -156,7 +168,7 @@ void check_box_read(const char* target, const std::string& path, const RawVolume
                "read_volume_grid disagrees with read_volume's grid");
     const VoxelBox box{{g.dims[0] / 2, g.dims[1] / 2, g.dims[2] / 2}, g.dims};
     const BinaryVolume part = read_volume_box(path, box, ValueRange{}, layout);
-    FUZZ_CHECK(target, part.mask == crop_volume(volume, VoxelBox{{0, 0, 0}, g.dims}, box).mask,
+    FUZZ_CHECK(target, equals_box_of(part, volume, box),
                "read_volume_box differs from the crop of read_volume");
     FUZZ_CHECK(target, part.grid.origin == g.voxel_center(box.lo[0], box.lo[1], box.lo[2]), "the box is not placed at its corner");
 }
