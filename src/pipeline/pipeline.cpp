@@ -494,8 +494,7 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
                        {"unknowns", 3 * surface.vertex_count()}};
     report["energy_before"] = energy_json(r.regularization.energy_before, r.weights);
     report["energy_after"] = energy_json(r.regularization.energy_after, r.weights);
-    const ValidityMode validity = r.label_meshes.empty() ? o.validity : ValidityMode::Check;  // label maps: checked only
-    report["validity"] = r.validity ? validity_json(*r.validity, r.weights, validity) : nlohmann::json(nullptr);
+    report["validity"] = r.validity ? validity_json(*r.validity, r.weights, o.validity) : nlohmann::json(nullptr);
     nlohmann::json stages = nlohmann::json::object();
     for (const auto& [name, seconds] : r.stage_seconds) stages[name] = seconds;
     stages["assembly"] = r.regularization.assembly_seconds;

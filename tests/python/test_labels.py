@@ -82,6 +82,7 @@ def test_array_gives_the_command_lines_complex_and_label_meshes(cli, npy_run):
     assert label_entries(result.report) == label_entries(report)
     assert result.report["label_complex"] == report["label_complex"]
     assert result.report["counts"] == report["counts"]
+    assert report["validity"]["repair"] and result.report["validity"]["repair"]  # label maps are repaired by default
     for value, mesh in result.label_meshes.items():
         assert mesh.report["label"] == value and mesh.report["faces"] == len(mesh.faces)
 
