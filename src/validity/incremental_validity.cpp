@@ -28,20 +28,50 @@ Box triangle_box(const PointMatrix& vertices, const FaceMatrix& triangles, Eigen
     return box;
 }
 
-/// Triangles bucketed by the cubic cells their bounding boxes overlap.
-class BoxGrid {
+void sort_unique(std::vector<std::int64_t>& values) {
+    std::sort(values.begin(), values.end());
+    values.erase(std::unique(values.begin(), values.end()), values.end());
+}
+
+}  // namespace
+
+/// Triangles bucketed by the cubic cells their bounding boxes overlap, kept up to date as they
+/// move: building it costs a hash-map entry per triangle and cell, so it is built once, with
+/// cells of twice the mean box extent of the mesh as checked first, and only the triangles that
+/// moved change cells afterwards.
+class IncrementalValidity::BoxGrid {
 public:
-    BoxGrid(const std::vector<Box>& boxes, double cell) : boxes_(boxes), cell_(cell) {
-        for (std::size_t t = 0; t < boxes.size(); ++t) for_cells(boxes[t], [&](std::int64_t key) { cells_[key].push_back(std::int64_t(t)); });
+    BoxGrid(const PointMatrix& vertices, const FaceMatrix& triangles) : boxes_(std::size_t(triangles.rows())) {
+        double extent = 0;
+        for (Eigen::Index t = 0; t < triangles.rows(); ++t) {
+            boxes_[std::size_t(t)] = triangle_box(vertices, triangles, t);
+            extent += (boxes_[std::size_t(t)].high - boxes_[std::size_t(t)].low).maxCoeff();
+        }
+        cell_ = std::max(2 * extent / double(std::max<Eigen::Index>(triangles.rows(), 1)), 1e-12);
+        for (std::size_t t = 0; t < boxes_.size(); ++t) for_cells(boxes_[t], [&](std::int64_t key) { cells_[key].push_back(std::int64_t(t)); });
     }
 
-    /// Triangles whose box overlaps `box`, appended to `out` (possibly repeated).
-    void query(const Box& box, std::vector<std::int64_t>& out) const {
+    /// Triangle t now has its corners at `vertices`.
+    void move(const PointMatrix& vertices, const FaceMatrix& triangles, std::int64_t t) {
+        for_cells(boxes_[std::size_t(t)], [&](std::int64_t key) {
+            std::vector<std::int64_t>& cell = cells_[key];
+            const auto it = std::find(cell.begin(), cell.end(), t);
+            *it = cell.back();
+            cell.pop_back();
+        });
+        boxes_[std::size_t(t)] = triangle_box(vertices, triangles, t);
+        for_cells(boxes_[std::size_t(t)], [&](std::int64_t key) { cells_[key].push_back(t); });
+    }
+
+    /// Triangles whose box overlaps the box of triangle t (t included), appended to `out`
+    /// (possibly repeated).
+    void query(std::int64_t t, std::vector<std::int64_t>& out) const {
+        const Box& box = boxes_[std::size_t(t)];
         for_cells(box, [&](std::int64_t key) {
             const auto it = cells_.find(key);
             if (it == cells_.end()) return;
-            for (const std::int64_t t : it->second)
-                if (boxes_[std::size_t(t)].overlaps(box)) out.push_back(t);
+            for (const std::int64_t other : it->second)
+                if (boxes_[std::size_t(other)].overlaps(box)) out.push_back(other);
         });
     }
 
@@ -55,17 +85,10 @@ private:
                     visit((std::int64_t(x) & 0x1fffff) | ((std::int64_t(y) & 0x1fffff) << 21) | ((std::int64_t(z) & 0x1fffff) << 42));
     }
 
-    const std::vector<Box>& boxes_;
-    double cell_;
+    std::vector<Box> boxes_;
+    double cell_ = 1;
     std::unordered_map<std::int64_t, std::vector<std::int64_t>> cells_;
 };
-
-void sort_unique(std::vector<std::int64_t>& values) {
-    std::sort(values.begin(), values.end());
-    values.erase(std::unique(values.begin(), values.end()), values.end());
-}
-
-}  // namespace
 
 IncrementalValidity::IncrementalValidity(const PointMatrix& vertices, const FaceMatrix& quads, const PointMatrix& field)
     : quads_(quads), quads_of_vertex_(std::size_t(vertices.rows())) {
@@ -81,6 +104,8 @@ IncrementalValidity::IncrementalValidity(const PointMatrix& vertices, const Face
     for (const std::int32_t q : faces_folded_against_field(vertices, quads, field)) folded_[std::size_t(q)] = 1;
     seconds_ = std::chrono::duration<double>(Clock::now() - started).count();
 }
+
+IncrementalValidity::~IncrementalValidity() = default;
 
 void IncrementalValidity::update(const PointMatrix& vertices, const std::vector<std::int32_t>& moved,
                                  const std::vector<std::int32_t>& refield, const PointMatrix& field) {
@@ -115,16 +140,10 @@ void IncrementalValidity::retest(const PointMatrix& vertices, const std::vector<
     for (const std::int32_t k : faces_folded_against_field(vertices, subset, subset_field)) folded_[std::size_t(quads_to_test[std::size_t(k)])] = 1;
 
     // The changed triangles and every triangle whose box meets one of theirs.
-    std::vector<Box> boxes(std::size_t(triangles_.rows()));
-    double extent = 0;
-    for (Eigen::Index t = 0; t < triangles_.rows(); ++t) {
-        boxes[std::size_t(t)] = triangle_box(vertices, triangles_, t);
-        extent += (boxes[std::size_t(t)].high - boxes[std::size_t(t)].low).maxCoeff();
-    }
-    const double cell = std::max(2 * extent / double(std::max<Eigen::Index>(triangles_.rows(), 1)), 1e-12);
-    const BoxGrid grid(boxes, cell);
+    if (!grid_) grid_ = std::make_unique<BoxGrid>(vertices, triangles_);
+    for (const std::int64_t t : changed) grid_->move(vertices, triangles_, t);
     std::vector<std::int64_t> tested = changed;
-    for (const std::int64_t t : changed) grid.query(boxes[std::size_t(t)], tested);
+    for (const std::int64_t t : changed) grid_->query(t, tested);
     sort_unique(tested);
 
     // Test them together, on compact vertex indices (shared indices stay shared).

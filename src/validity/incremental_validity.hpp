@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -16,6 +17,7 @@ class IncrementalValidity {
 public:
     /// Checks the whole mesh (quads) once, with the field (one vector per quad).
     IncrementalValidity(const PointMatrix& vertices, const FaceMatrix& quads, const PointMatrix& field);
+    ~IncrementalValidity();
 
     /// The vertices in `moved` have new positions in `vertices`, and the quads in `refield` a new
     /// field vector: tests again what they can have changed. Same result as check_mesh_validity
@@ -27,6 +29,8 @@ public:
     MeshValidity validity() const;
 
 private:
+    class BoxGrid;
+
     void retest(const PointMatrix& vertices, const std::vector<std::int32_t>& quads_to_test, const PointMatrix& field);
 
     const FaceMatrix& quads_;
@@ -35,6 +39,7 @@ private:
     std::vector<std::pair<std::int64_t, std::int64_t>> pairs_;  ///< intersecting triangles, sorted
     std::vector<char> degenerate_;                               ///< per triangle
     std::vector<char> folded_;                                   ///< per quad
+    std::unique_ptr<BoxGrid> grid_;  ///< the triangles' boxes, from the first update on
     double seconds_ = 0;
 };
 

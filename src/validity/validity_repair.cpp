@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/SparseCholesky>
+
 #include "dsreg/error.hpp"
 #include "dsreg/label_surface.hpp"
 #include "incremental_validity.hpp"
@@ -22,6 +24,10 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 using SparseMatrix = Eigen::SparseMatrix<double>;
+
+/// Relative residual to which the large local systems are solved iteratively: below the 1e-9 of
+/// the repair's reported stationarity with a margin.
+constexpr double kLargePartTolerance = 1e-12;
 
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
@@ -289,10 +295,35 @@ private:
             groups[std::size_t(index)].push_back(v);
         }
         for (const std::int32_t v : vertices) mark_[std::size_t(v)] = 0;
-        for (const std::vector<std::int32_t>& part : groups) {
-            solve_part(part, report);
-            ++report.parts_solved;
+        // The parts share no unknown and no coupling: the small ones are solved side by side (each
+        // reads the positions around it, which no other part writes), the large ones after.
+        std::vector<std::size_t> small, large;
+        for (std::size_t k = 0; k < groups.size(); ++k) (is_small(groups[k]) ? small : large).push_back(k);
+        std::vector<std::vector<std::int32_t>> moved(groups.size());
+        std::vector<char> converged(groups.size(), 1), failed(groups.size(), 0);
+#pragma omp parallel for schedule(dynamic, 8) if (small.size() > 16)
+        for (std::size_t k = 0; k < small.size(); ++k) {
+            try {
+                converged[small[k]] = solve_part(groups[small[k]], moved[small[k]]);
+            } catch (...) {
+                failed[small[k]] = 1;  // no exception may leave the parallel loop
+            }
         }
+        if (std::find(failed.begin(), failed.end(), 1) != failed.end())
+            throw Error("validity repair: a local system is not positive definite");
+        for (const std::size_t k : large) converged[k] = solve_part(groups[k], moved[k]);
+        for (std::size_t k = 0; k < groups.size(); ++k) {
+            moved_->insert(moved_->end(), moved[k].begin(), moved[k].end());
+            report.converged = report.converged && converged[k];
+        }
+        report.parts_solved += std::int64_t(groups.size());
+    }
+
+    /// Parts this small are solved by a simplicial Cholesky factorization, several at once; larger
+    /// ones by CHOLMOD's supernodal one, which uses every core itself (and the box QP always so).
+    bool is_small(const std::vector<std::int32_t>& part) const {
+        constexpr std::size_t kSmallPartVertices = 2000;
+        return !o_.clamp_half_width && part.size() <= kSmallPartVertices;
     }
 
     /// Adds block `M` at (row vertex r, column vertex c) of E' restricted to the part: into the
@@ -377,28 +408,44 @@ private:
     }
 
     /// min E' over the part, the rest held (sparse Cholesky; the box QP with the clamp boxes).
-    void solve_part(const std::vector<std::int32_t>& part, ValidityRepairReport& report) {
+    /// `moved` receives the part's vertices that moved; returns whether the box QP converged.
+    bool solve_part(const std::vector<std::int32_t>& part, std::vector<std::int32_t>& moved) {
         for (std::size_t k = 0; k < part.size(); ++k) local_[std::size_t(part[k])] = std::int32_t(k);
         SparseMatrix matrix;
         Eigen::VectorXd b, x;
         part_system(part, matrix, b);
         gather(part, x);
+        bool converged = true;
         if (o_.clamp_half_width) {
             Eigen::VectorXd lower, upper, unconstrained;
             clamp_bounds_of(part, lower, upper);
-            report.converged = solve_box_qp_from_unconstrained(matrix, b, lower, upper, unconstrained, x, o_.qp).converged &&
-                               report.converged;
+            converged = solve_box_qp_from_unconstrained(matrix, b, lower, upper, unconstrained, x, o_.qp).converged;
+        } else if (is_small(part)) {
+            const Eigen::SimplicialLLT<SparseMatrix, Eigen::Lower> llt(matrix);
+            if (llt.info() != Eigen::Success) throw Error("validity repair: a local system is not positive definite");
+            x = llt.solve(b);
         } else {
+            // Large parts: multigrid CG from the current positions, which are close to the
+            // solution (only the strengthened rows changed); CHOLMOD if it fails.
             SolverOptions solver;
-            solver.kind = SolverKind::Cholmod;
-            solve_spd(matrix, b, x, solver);
+            solver.kind = SolverKind::Amg;
+            solver.tolerance = kLargePartTolerance;
+            solver.max_iterations = 500;
+            try {
+                solve_spd(matrix, b, x, solver);
+            } catch (const Error&) {
+                gather(part, x);
+                solver.kind = SolverKind::Cholmod;
+                solve_spd(matrix, b, x, solver);
+            }
         }
         for (std::size_t k = 0; k < part.size(); ++k) {
             auto position = x_.segment<3>(3 * Eigen::Index(part[k]));
-            if (position != x.segment<3>(3 * Eigen::Index(k))) moved_->push_back(part[k]);
+            if (position != x.segment<3>(3 * Eigen::Index(k))) moved.push_back(part[k]);
             position = x.segment<3>(3 * Eigen::Index(k));
             local_[std::size_t(part[k])] = -1;
         }
+        return converged;
     }
 
     const DigitalSurface& surface_;
