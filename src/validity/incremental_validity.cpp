@@ -63,15 +63,18 @@ public:
         for_cells(boxes_[std::size_t(t)], [&](std::int64_t key) { cells_[key].push_back(t); });
     }
 
-    /// Triangles whose box overlaps the box of triangle t (t included), appended to `out`
-    /// (possibly repeated).
-    void query(std::int64_t t, std::vector<std::int64_t>& out) const {
+    /// Triangles whose box overlaps the box of triangle t (t included) and not yet `seen`,
+    /// appended to `out` and marked seen.
+    void query(std::int64_t t, std::vector<char>& seen, std::vector<std::int64_t>& out) const {
         const Box& box = boxes_[std::size_t(t)];
         for_cells(box, [&](std::int64_t key) {
             const auto it = cells_.find(key);
             if (it == cells_.end()) return;
             for (const std::int64_t other : it->second)
-                if (boxes_[std::size_t(other)].overlaps(box)) out.push_back(other);
+                if (!seen[std::size_t(other)] && boxes_[std::size_t(other)].overlaps(box)) {
+                    seen[std::size_t(other)] = 1;
+                    out.push_back(other);
+                }
         });
     }
 
@@ -142,9 +145,10 @@ void IncrementalValidity::retest(const PointMatrix& vertices, const std::vector<
     // The changed triangles and every triangle whose box meets one of theirs.
     if (!grid_) grid_ = std::make_unique<BoxGrid>(vertices, triangles_);
     for (const std::int64_t t : changed) grid_->move(vertices, triangles_, t);
-    std::vector<std::int64_t> tested = changed;
-    for (const std::int64_t t : changed) grid_->query(t, tested);
-    sort_unique(tested);
+    std::vector<char> seen(std::size_t(triangles_.rows()), 0);
+    std::vector<std::int64_t> tested;
+    for (const std::int64_t t : changed) grid_->query(t, seen, tested);
+    std::sort(tested.begin(), tested.end());
 
     // Test them together, on compact vertex indices (shared indices stay shared).
     std::unordered_map<std::int32_t, std::int32_t> local;
