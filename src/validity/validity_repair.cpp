@@ -412,7 +412,8 @@ private:
             }
     }
 
-    /// min E' over the part, the rest held (sparse Cholesky; the box QP with the clamp boxes).
+    /// min E' over the part from the current positions, the rest held (sparse Cholesky or
+    /// multigrid CG; the box QP with the clamp boxes).
     /// `moved` receives the part's vertices that moved; returns whether the box QP converged.
     bool solve_part(const std::vector<std::int32_t>& part, std::vector<std::int32_t>& moved) {
         for (std::size_t k = 0; k < part.size(); ++k) local_[std::size_t(part[k])] = std::int32_t(k);
@@ -422,9 +423,14 @@ private:
         gather(part, x);
         bool converged = true;
         if (o_.clamp_half_width) {
-            Eigen::VectorXd lower, upper, unconstrained;
+            // From the current positions: inside the boxes and close to the minimizer (only the
+            // strengthened rows changed), so the active set iterations need no ADMM phase to find
+            // the active set (lobster: 4-5 factorizations instead of 50 ADMM iterations and 7).
+            Eigen::VectorXd lower, upper;
             clamp_bounds_of(part, lower, upper);
-            converged = solve_box_qp_from_unconstrained(matrix, b, lower, upper, unconstrained, x, o_.qp).converged;
+            BoxQpOptions qp = o_.qp;
+            qp.admm_max_iterations = 0;
+            converged = solve_box_qp(matrix, b, lower, upper, x, qp).converged;
         } else if (is_small(part)) {
             const Eigen::SimplicialLLT<SparseMatrix, Eigen::Lower> llt(matrix);
             if (llt.info() != Eigen::Success) throw Error("validity repair: a local system is not positive definite");
