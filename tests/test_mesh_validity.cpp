@@ -102,6 +102,31 @@ TEST(SelfIntersections, NonManifoldEdgeIsSharedByIndexAsAnyOther) {
               (Pairs{{0, 3}}));
 }
 
+TEST(SelfIntersections, SheetsMeetingAtAJunctionVertexOnlyTouchWhereTheyShare) {
+    // Eight quads around vertex 6, a junction of a 100-label map where four sheets meet (taken
+    // from the repaired mesh of bench/labels_bench.sh's blobs, positions rounded to 1e-6): no two
+    // of them meet beyond what they share by index, yet CGAL's rule for faces sharing a vertex,
+    // which assumes a manifold neighbourhood, reported two pairs here, and the repair, holding
+    // every vertex at its target, could not clear them.
+    const PointMatrix p = points({{71.386939, 99.522667, 73.627443}, {70.464995, 99.324892, 73.84026}, {71.522982, 100.469877, 73.567405},
+                                  {70.640493, 100.450341, 73.747126}, {72.290327, 100.550556, 73.287738}, {72.5, 101.5, 73.5},
+                                  {71.5, 101.5, 73.5}, {72.5, 102.5, 73.5}, {71.5, 102.5, 73.5}, {70.519932, 100.294542, 74.439841},
+                                  {71.385475, 100.551611, 74.248734}, {70.5, 101.5, 73.5}, {71.5, 101.5, 74.5},
+                                  {70.61792, 101.493865, 74.612204}, {72.331064, 101.590957, 74.475525}, {70.5, 102.5, 73.5},
+                                  {71.429289, 102.5, 74.429289}});
+    const FaceMatrix quads = faces({{1, 0, 2, 3}, {6, 5, 7, 8}, {3, 11, 6, 2}, {9, 10, 12, 13}, {6, 12, 14, 5}, {2, 6, 5, 4},
+                                    {6, 8, 16, 12}, {11, 15, 8, 6}});
+    const FaceMatrix triangles = mesh_triangles(p, quads);
+    for (Eigen::Index a = 0; a < triangles.rows(); ++a)
+        for (Eigen::Index b = a + 1; b < triangles.rows(); ++b) {
+            FaceMatrix pair(2, 3);
+            pair << triangles.row(a), triangles.row(b);
+            ASSERT_TRUE(triangle_self_intersections(p, pair).pairs.empty()) << "triangles " << a << " and " << b;
+        }
+    EXPECT_TRUE(triangle_self_intersections(p, triangles).pairs.empty());
+    EXPECT_TRUE(check_mesh_validity(p, quads).valid());
+}
+
 TEST(SelfIntersections, RejectsBadInput) {
     const PointMatrix p = points({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
     EXPECT_THROW(triangle_self_intersections(p, faces({{0, 1, 3}})), Error);

@@ -64,6 +64,10 @@ CgalMesh make_cgal_mesh(const PointMatrix& vertices, const FaceMatrix& triangles
     return mesh;
 }
 
+/// CGAL's own rule for faces that share vertices assumes a manifold neighbourhood: around a
+/// junction vertex of a label complex, where several sheets meet, it reported two triangles that
+/// touch only at what they share (an 8-face neighbourhood of a 100-label map, each pair valid on
+/// its own): every reported pair that shares an index is decided again by this rule.
 /// Whether triangles a and b (rows of `triangles`) meet beyond the vertices they share by index:
 /// the rule CGAL applies to adjacent faces, on the indices (a triangle of a non-manifold edge,
 /// such as a junction of a label complex, shares its edge with several others). Sharing an edge,
@@ -91,6 +95,13 @@ bool meet_beyond_shared_indices(const PointMatrix& vertices, const FaceMatrix& t
     const Kernel::Segment_3 a_opposite(point(a, (i + 1) % 3), point(a, (i + 2) % 3));
     const Kernel::Segment_3 b_opposite(point(b, (j + 1) % 3), point(b, (j + 2) % 3));
     return CGAL::do_intersect(triangle(a), b_opposite) || CGAL::do_intersect(triangle(b), a_opposite);
+}
+
+bool share_an_index(const FaceMatrix& triangles, std::int64_t a, std::int64_t b) {
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            if (triangles(a, i) == triangles(b, j)) return true;
+    return false;
 }
 
 /// The faces in slabs along the longest axis of the mesh, one slab per thread: a face belongs to
@@ -173,8 +184,9 @@ TriangleSelfIntersections triangle_self_intersections(const PointMatrix& vertice
         const std::int64_t a = triangle_of[f.idx()], b = triangle_of[g.idx()];
         if (a == b)
             result.degenerate.push_back(a);  // CGAL reports a degenerate face as the pair (f, f)
-        else if ((copied[std::size_t(a)] || copied[std::size_t(b)]) && !meet_beyond_shared_indices(vertices, triangles, a, b))
-            continue;  // a copied triangle only touches what it shares by index
+        else if ((copied[std::size_t(a)] || copied[std::size_t(b)] || share_an_index(triangles, a, b)) &&
+                 !meet_beyond_shared_indices(vertices, triangles, a, b))
+            continue;  // they only touch what they share by index
         else
             result.pairs.emplace_back(std::min(a, b), std::max(a, b));
     }
