@@ -24,7 +24,8 @@
 //    neighbours fold). The region U grows by these vertices and their `region_rings` rings. Then
 //    E' is minimized over the free vertices of U within `window_rings` of them, everything else
 //    held (the rows of R and b of eq. 22 plus the terms above, each connected part of the
-//    window solved exactly by sparse Cholesky).
+//    window solved on its own: small parts by sparse Cholesky, large ones by multigrid CG from
+//    the current positions, the box QP with `clamp_half_width`).
 //    Rings are taken across every edge of the mesh (on a label complex, from a junction vertex
 //    into the sheets that meet there, which the junction-aware fairness links leave out).
 //  * A face whose u points into the object or nearly along the face (u·n_s < `field_margin`, n_s

@@ -38,25 +38,21 @@ void check_triangle_mesh(const PointMatrix& vertices, const FaceMatrix& triangle
 
 /// The triangles as a CGAL surface mesh on the same vertex indices; `triangle_of` maps each CGAL
 /// face back to its row. A triangle that does not fit the edge structure of those added before it
-/// (a non-manifold edge or vertex, an orientation clash) gets its own copies of its vertices, and
-/// `copied` marks its row: CGAL then sees no adjacency for it and reports every contact.
-CgalMesh make_cgal_mesh(const PointMatrix& vertices, const FaceMatrix& triangles, std::vector<std::int64_t>& triangle_of,
-                        std::vector<char>& copied) {
+/// (a non-manifold edge or vertex, an orientation clash) gets its own copies of its vertices:
+/// CGAL then sees no adjacency for it and reports every contact.
+CgalMesh make_cgal_mesh(const PointMatrix& vertices, const FaceMatrix& triangles, std::vector<std::int64_t>& triangle_of) {
     CgalMesh mesh;
     mesh.reserve(CgalMesh::size_type(vertices.rows()), CgalMesh::size_type(3 * triangles.rows()),
                  CgalMesh::size_type(triangles.rows()));
     const auto point = [&](Eigen::Index v) { return Kernel::Point_3(vertices(v, 0), vertices(v, 1), vertices(v, 2)); };
     for (Eigen::Index v = 0; v < vertices.rows(); ++v) mesh.add_vertex(point(v));
     triangle_of.clear();
-    copied.assign(std::size_t(triangles.rows()), 0);
     for (Eigen::Index t = 0; t < triangles.rows(); ++t) {
         const auto corner = [&](int k) { return CgalVertex(CgalMesh::size_type(triangles(t, k))); };
         CgalFace face = mesh.add_face(corner(0), corner(1), corner(2));
-        if (face == CgalMesh::null_face()) {
-            copied[std::size_t(t)] = 1;
+        if (face == CgalMesh::null_face())
             face = mesh.add_face(mesh.add_vertex(point(triangles(t, 0))), mesh.add_vertex(point(triangles(t, 1))),
                                  mesh.add_vertex(point(triangles(t, 2))));
-        }
         if (std::size_t(face.idx()) != triangle_of.size())
             throw Error("self-intersection test: could not build triangle " + std::to_string(t));  // not expected
         triangle_of.push_back(t);
@@ -64,10 +60,6 @@ CgalMesh make_cgal_mesh(const PointMatrix& vertices, const FaceMatrix& triangles
     return mesh;
 }
 
-/// CGAL's own rule for faces that share vertices assumes a manifold neighbourhood: around a
-/// junction vertex of a label complex, where several sheets meet, it reported two triangles that
-/// touch only at what they share (an 8-face neighbourhood of a 100-label map, each pair valid on
-/// its own): every reported pair that shares an index is decided again by this rule.
 /// Whether triangles a and b (rows of `triangles`) meet beyond the vertices they share by index:
 /// the rule CGAL applies to adjacent faces, on the indices (a triangle of a non-manifold edge,
 /// such as a junction of a label complex, shares its edge with several others). Sharing an edge,
@@ -95,13 +87,6 @@ bool meet_beyond_shared_indices(const PointMatrix& vertices, const FaceMatrix& t
     const Kernel::Segment_3 a_opposite(point(a, (i + 1) % 3), point(a, (i + 2) % 3));
     const Kernel::Segment_3 b_opposite(point(b, (j + 1) % 3), point(b, (j + 2) % 3));
     return CGAL::do_intersect(triangle(a), b_opposite) || CGAL::do_intersect(triangle(b), a_opposite);
-}
-
-bool share_an_index(const FaceMatrix& triangles, std::int64_t a, std::int64_t b) {
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-            if (triangles(a, i) == triangles(b, j)) return true;
-    return false;
 }
 
 /// The faces in slabs along the longest axis of the mesh, one slab per thread: a face belongs to
@@ -175,8 +160,7 @@ std::vector<std::pair<CgalFace, CgalFace>> cgal_self_intersections(const CgalMes
 TriangleSelfIntersections triangle_self_intersections(const PointMatrix& vertices, const FaceMatrix& triangles) {
     check_triangle_mesh(vertices, triangles);
     std::vector<std::int64_t> triangle_of;
-    std::vector<char> copied;
-    const CgalMesh mesh = make_cgal_mesh(vertices, triangles, triangle_of, copied);
+    const CgalMesh mesh = make_cgal_mesh(vertices, triangles, triangle_of);
     const std::vector<std::pair<CgalFace, CgalFace>> found = cgal_self_intersections(mesh);
 
     TriangleSelfIntersections result;
@@ -184,9 +168,12 @@ TriangleSelfIntersections triangle_self_intersections(const PointMatrix& vertice
         const std::int64_t a = triangle_of[f.idx()], b = triangle_of[g.idx()];
         if (a == b)
             result.degenerate.push_back(a);  // CGAL reports a degenerate face as the pair (f, f)
-        else if ((copied[std::size_t(a)] || copied[std::size_t(b)] || share_an_index(triangles, a, b)) &&
-                 !meet_beyond_shared_indices(vertices, triangles, a, b))
-            continue;  // they only touch what they share by index
+        // CGAL's candidates, decided by the index rule: CGAL's own rule for faces sharing vertices
+        // sees only the adjacency of its mesh (none for a copied triangle) and assumes a manifold
+        // neighbourhood, which the junctions of a label complex are not (around one junction
+        // vertex of a 100-label map it reported two pairs that only touch where they share).
+        else if (!meet_beyond_shared_indices(vertices, triangles, a, b))
+            continue;
         else
             result.pairs.emplace_back(std::min(a, b), std::max(a, b));
     }

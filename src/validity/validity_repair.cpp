@@ -162,7 +162,7 @@ public:
         for (const std::int32_t v : rings_around(neighbours_, strengthened, o_.region_rings, mark_, [](std::int32_t) { return true; }))
             in_region_[std::size_t(v)] = 1;
         solve(rings_around(neighbours_, strengthened, o_.window_rings, mark_, [&](std::int32_t v) { return free_in_region(v); }),
-              report);
+              kRoundPartTolerance, report);
         report.solve_seconds += seconds_since(started);
     }
 
@@ -173,9 +173,7 @@ public:
         std::vector<std::int32_t> region;
         for (std::size_t i = 0; i < in_region_.size(); ++i)
             if (free_in_region(std::int64_t(i))) region.push_back(std::int32_t(i));
-        exact_ = true;
-        solve(region, report);
-        exact_ = false;
+        solve(region, kExactPartTolerance, report);
         report.solve_seconds += seconds_since(started);
     }
 
@@ -214,7 +212,6 @@ public:
     }
     const Eigen::VectorXd& state() const { return x_; }
     const PointMatrix& field() const { return field_; }
-    const VertexLinks& links() const { return links_; }
 
     void finish(ValidityRepairResult& result) const {
         result.alpha_factors.resize(surface_.vertex_count());
@@ -284,8 +281,9 @@ private:
     bool free_in_region(std::int64_t v) const { return in_region_[std::size_t(v)] && !held_[std::size_t(v)]; }
 
     /// Minimizes E' over `vertices` (sorted, free region vertices), every other vertex held:
-    /// each connected part (under the coupling of R) on its own.
-    void solve(const std::vector<std::int32_t>& vertices, ValidityRepairReport& report) {
+    /// each connected part (under the coupling of R) on its own; `tolerance`: the relative residual
+    /// of the iterative solves of large parts.
+    void solve(const std::vector<std::int32_t>& vertices, double tolerance, ValidityRepairReport& report) {
         const SparseMatrix& R = system_.matrix;
         for (const std::int32_t v : vertices) mark_[std::size_t(v)] = 1;
         Parts parts(mark_.size());
@@ -309,14 +307,14 @@ private:
 #pragma omp parallel for schedule(dynamic, 8) if (small.size() > 16)
         for (std::size_t k = 0; k < small.size(); ++k) {
             try {
-                converged[small[k]] = solve_part(groups[small[k]], moved[small[k]]);
+                converged[small[k]] = solve_part(groups[small[k]], tolerance, moved[small[k]]);
             } catch (...) {
                 failed[small[k]] = 1;  // no exception may leave the parallel loop
             }
         }
         if (std::find(failed.begin(), failed.end(), 1) != failed.end())
             throw Error("validity repair: a local system is not positive definite");
-        for (const std::size_t k : large) converged[k] = solve_part(groups[k], moved[k]);
+        for (const std::size_t k : large) converged[k] = solve_part(groups[k], tolerance, moved[k]);
         for (std::size_t k = 0; k < groups.size(); ++k) {
             moved_->insert(moved_->end(), moved[k].begin(), moved[k].end());
             report.converged = report.converged && converged[k];
@@ -325,7 +323,7 @@ private:
     }
 
     /// Parts this small are solved by a simplicial Cholesky factorization, several at once; larger
-    /// ones by CHOLMOD's supernodal one, which uses every core itself (and the box QP always so).
+    /// ones by multigrid CG, which uses every core itself, and the box QPs one after the other.
     bool is_small(const std::vector<std::int32_t>& part) const {
         constexpr std::size_t kSmallPartVertices = 2000;
         return !o_.clamp_half_width && part.size() <= kSmallPartVertices;
@@ -415,7 +413,7 @@ private:
     /// min E' over the part from the current positions, the rest held (sparse Cholesky or
     /// multigrid CG; the box QP with the clamp boxes).
     /// `moved` receives the part's vertices that moved; returns whether the box QP converged.
-    bool solve_part(const std::vector<std::int32_t>& part, std::vector<std::int32_t>& moved) {
+    bool solve_part(const std::vector<std::int32_t>& part, double tolerance, std::vector<std::int32_t>& moved) {
         for (std::size_t k = 0; k < part.size(); ++k) local_[std::size_t(part[k])] = std::int32_t(k);
         SparseMatrix matrix;
         Eigen::VectorXd b, x;
@@ -440,7 +438,7 @@ private:
             // solution (only the strengthened rows changed); CHOLMOD if it fails.
             SolverOptions solver;
             solver.kind = SolverKind::Amg;
-            solver.tolerance = exact_ ? kExactPartTolerance : kRoundPartTolerance;
+            solver.tolerance = tolerance;
             solver.max_iterations = 500;
             try {
                 solve_spd(matrix, b, x, solver);
@@ -476,7 +474,6 @@ private:
     std::vector<std::int32_t> local_;  ///< index in the part being solved, −1 elsewhere
     std::vector<char> mark_;           ///< scratch, all 0 between calls
     std::vector<std::int32_t>* moved_ = nullptr;
-    bool exact_ = false;  ///< solving the whole region (solve_region), not a round's window
 };
 
 }  // namespace
