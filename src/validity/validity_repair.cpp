@@ -12,7 +12,11 @@
 #include <vector>
 
 #include <Eigen/SparseCholesky>
+#include <omp.h>
 
+// The block rows of R, computed one vertex at a time (an internal header of the regularization
+// module): the repair reads the rows of its region only, never the whole assembled matrix.
+#include "../regularization/regularization_operator.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/label_surface.hpp"
 #include "incremental_validity.hpp"
@@ -128,7 +132,8 @@ std::vector<std::int32_t> rings_around(const VertexLinks& links, const std::vect
 }
 
 /// The state of a repair: the α factors m_i, the held vertices, the corrected field, the region
-/// and the current positions x. E' differs from E (assembled once, as R and b) by
+/// and the current positions x. E' differs from E (R x = b, R read block row by block row for the
+/// vertices solved: the region is usually a small part of the mesh) by
 ///   Σ_i (m_i − 1) α α_i w0_i |x_i − t_i|²  +  Σ_{corrected f} β β_f w2_f Σ_e [((x_a − x_b)·u'_f)² − ((x_a − x_b)·u_f)²],
 /// which the local solves add to the rows they solve for.
 class Repair {
@@ -141,8 +146,9 @@ public:
           x_(flatten_points(positions)), factor_(std::size_t(surface.vertex_count()), 1.0),
           held_(std::size_t(surface.vertex_count()), 0), in_region_(std::size_t(surface.vertex_count()), 0),
           corrected_(std::size_t(surface.face_count()), 0), local_(std::size_t(surface.vertex_count()), -1),
-          mark_(std::size_t(surface.vertex_count()), 0) {
-        system_ = assemble_regularization_system(surface.vertices, surface.quads, links_, normals, weights);
+          mark_(std::size_t(surface.vertex_count()), 0),
+          rows_(surface.quads, links_, input_field_, weights, surface.vertex_count()) {
+        for (int t = 0; t < omp_get_max_threads(); ++t) row_scratch_.emplace_back(surface.vertex_count());
         faces_of_vertex_.assign(std::size_t(surface.vertex_count()), {});
         for (std::int64_t f = 0; f < surface.face_count(); ++f)
             for (int k = 0; k < 4; ++k) faces_of_vertex_[std::size_t(surface.quads(f, k))].push_back(std::int32_t(f));
@@ -284,12 +290,14 @@ private:
     /// each connected part (under the coupling of R) on its own; `tolerance`: the relative residual
     /// of the iterative solves of large parts.
     void solve(const std::vector<std::int32_t>& vertices, double tolerance, ValidityRepairReport& report) {
-        const SparseMatrix& R = system_.matrix;
         for (const std::int32_t v : vertices) mark_[std::size_t(v)] = 1;
         Parts parts(mark_.size());
-        for (const std::int32_t v : vertices)
-            for (SparseMatrix::InnerIterator it(R, 3 * Eigen::Index(v)); it; ++it)
-                if (mark_[std::size_t(it.row() / 3)]) parts.unite(v, it.row() / 3);
+        detail::RegularizationOperator::Row& row = row_scratch_.front();
+        for (const std::int32_t v : vertices) {
+            rows_.row(v, row, false);
+            for (const std::int32_t c : row.columns)
+                if (mark_[std::size_t(c)]) parts.unite(v, c);
+        }
         std::vector<std::int64_t> index_of_root(mark_.size(), -1);
         std::vector<std::vector<std::int32_t>> groups;
         for (const std::int32_t v : vertices) {
@@ -343,32 +351,37 @@ private:
         }
     }
 
-    /// The rows of E' for the part (local_ set): R_PP x_P = b_P − R_P,rest x_rest (R symmetric:
-    /// column c of R gives row c), plus the repair's terms.
+    /// The rows of E' for the part (local_ set): R_PP x_P = b_P − R_P,rest x_rest, plus the
+    /// repair's terms. A block of R without an alignment part is c·I3 and gives its diagonal only,
+    /// as in the assembled matrix.
     void part_system(const std::vector<std::int32_t>& part, SparseMatrix& matrix, Eigen::VectorXd& b) const {
-        const SparseMatrix& R = system_.matrix;
         const Eigen::Index n = 3 * Eigen::Index(part.size());
+        detail::RegularizationOperator::Row& row = row_scratch_[std::size_t(omp_get_thread_num())];
         std::vector<Eigen::Triplet<double>> entries;
         b.resize(n);
         for (std::size_t k = 0; k < part.size(); ++k) {
             const std::int32_t v = part[k];
-            for (int d = 0; d < 3; ++d) {
-                const Eigen::Index column = 3 * Eigen::Index(v) + d, c = 3 * Eigen::Index(k) + d;
-                b[c] = system_.rhs[column];
-                for (SparseMatrix::InnerIterator it(R, column); it; ++it) {
-                    const std::int32_t row_local = local_[std::size_t(it.row() / 3)];
-                    if (row_local >= 0)
-                        entries.emplace_back(3 * Eigen::Index(row_local) + it.row() % 3, c, it.value());
-                    else
-                        b[c] -= it.value() * x_[it.row()];
+            const Eigen::Index r = 3 * Eigen::Index(k);
+            b.segment<3>(r) = weights_.alpha * detail::data_weight(weights_, v) * surface_.vertices.row(v).transpose();
+            rows_.row(v, row, true);
+            for (std::size_t q = 0; q < row.columns.size(); ++q) {
+                const std::int32_t c = row.columns[q];
+                const Eigen::Matrix3d& block = row.blocks[q];
+                const std::int32_t column_local = local_[std::size_t(c)];
+                if (column_local < 0) {
+                    b.segment<3>(r) -= block * x_.segment<3>(3 * Eigen::Index(c));
+                    continue;
                 }
+                for (int i = 0; i < 3; ++i)
+                    for (int j = 0; j < 3; ++j)
+                        if (row.full[q] || i == j) entries.emplace_back(r + i, 3 * Eigen::Index(column_local) + j, block(i, j));
             }
             // Stronger data term (m − 1) α α_i w0_i |x_i − t_i|².
             const double extra = (factor_[std::size_t(v)] - 1) * weights_.alpha * element_or_one(weights_.vertex_alpha, v) *
                                  element_or_one(weights_.vertex_weights, v);
             if (extra > 0) {
-                for (int d = 0; d < 3; ++d) entries.emplace_back(3 * Eigen::Index(k) + d, 3 * Eigen::Index(k) + d, extra);
-                b.segment<3>(3 * Eigen::Index(k)) += extra * targets_.row(v).transpose();
+                for (int d = 0; d < 3; ++d) entries.emplace_back(r + d, r + d, extra);
+                b.segment<3>(r) += extra * targets_.row(v).transpose();
             }
         }
         // Corrected faces: their alignment blocks with u' instead of u (eq. 5–10).
@@ -465,7 +478,6 @@ private:
     PointMatrix input_field_, field_;
     PointMatrix targets_;
     Eigen::VectorXd x_;
-    RegularizationSystem system_;
     std::vector<std::vector<std::int32_t>> faces_of_vertex_;
     std::vector<double> factor_;  ///< m_i
     std::vector<char> held_;
@@ -473,6 +485,8 @@ private:
     std::vector<char> corrected_;      ///< faces whose u was replaced
     std::vector<std::int32_t> local_;  ///< index in the part being solved, −1 elsewhere
     std::vector<char> mark_;           ///< scratch, all 0 between calls
+    detail::RegularizationOperator rows_;  ///< R of E, block row by block row
+    mutable std::vector<detail::RegularizationOperator::Row> row_scratch_;  ///< one per thread
     std::vector<std::int32_t>* moved_ = nullptr;
 };
 
