@@ -13,6 +13,8 @@
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
 #include "dsreg/mesh_validity.hpp"
+#include "../src/validity/incremental_validity.hpp"
+#include "dsreg/label_surface.hpp"
 #include "dsreg/normals.hpp"
 #include "test_support.hpp"
 
@@ -157,9 +159,8 @@ TEST(MeshValidity, DigitalCubeAndSphereAreValid) {
 }
 
 TEST(SelfIntersections, ClosedSurfaceInAnyTriangleOrderIsClean) {
-    // The triangles are built into CGAL's mesh in the order given; a closed sphere whose
-    // triangles come in random order must still be found clean (no triangle refused and left to
-    // its own copies of the shared vertices).
+    // A closed sphere whose triangles come in random order is clean: no pair depends on the order
+    // in which the triangles are given (nor on which of two triangles comes first).
     const DigitalSurface surface = extract_digital_surface(test::make_ball(12, 4, 5.5), Connectivity::TwentySix);
     PointMatrix on_sphere = surface.vertices;
     for (Eigen::Index i = 0; i < on_sphere.rows(); ++i)
@@ -196,6 +197,60 @@ TEST(SelfIntersections, SplittingTheWorkOverThreadsFindsTheSamePairs) {
     EXPECT_GT(one.pairs.size(), 100u);
     EXPECT_EQ(one.pairs, two.pairs);
     EXPECT_EQ(one.degenerate, two.degenerate);
+}
+
+/// Moves random batches of vertices of `surface` (some far enough to fold faces and make the
+/// surface cut through itself, some onto a neighbour: degenerate triangles, some back to where they
+/// were), flips the field on some faces, and checks after each step that the incremental check,
+/// which tests only what moved, reports what the check of the whole mesh reports. Returns the
+/// number of invalid states seen.
+int incremental_against_whole(const DigitalSurface& surface, unsigned seed) {
+    PointMatrix x = surface.vertices;
+    PointMatrix field = trivial_normals(surface);
+    validity_internal::IncrementalValidity tracker(x, surface.quads, field);
+    std::mt19937 random(seed);
+    std::uniform_int_distribution<std::int32_t> vertex(0, std::int32_t(x.rows()) - 1);
+    std::uniform_int_distribution<std::int32_t> face(0, std::int32_t(surface.face_count()) - 1);
+    std::normal_distribution<double> step(0.0, 0.6);
+    int invalid = 0;
+    for (int batch = 0; batch < 40; ++batch) {
+        std::vector<std::int32_t> moved, refield;
+        const int count = batch % 3 == 0 ? 150 : 4;
+        for (int k = 0; k < count; ++k) {
+            const std::int32_t v = vertex(random);
+            moved.push_back(v);
+            for (int d = 0; d < 3; ++d) x(v, d) += step(random);
+        }
+        if (batch % 5 == 4)
+            for (const std::int32_t v : moved) x.row(v) = surface.vertices.row(v);
+        if (batch % 7 == 6) {
+            const std::int32_t f = face(random);
+            moved.push_back(surface.quads(f, 0));
+            x.row(surface.quads(f, 0)) = x.row(surface.quads(f, 1));
+        }
+        if (batch % 4 == 1)
+            for (int k = 0; k < 3; ++k) {
+                const std::int32_t f = face(random);
+                field.row(f) *= -1;
+                refield.push_back(f);
+            }
+        tracker.update(x, moved, refield, field);
+        const MeshValidity incremental = tracker.validity(), whole = check_mesh_validity(x, surface.quads, field);
+        EXPECT_EQ(incremental.intersecting_pairs, whole.intersecting_pairs) << "batch " << batch;
+        EXPECT_EQ(incremental.degenerate_triangles, whole.degenerate_triangles) << "batch " << batch;
+        EXPECT_EQ(incremental.intersecting_faces, whole.intersecting_faces) << "batch " << batch;
+        EXPECT_EQ(incremental.folded, whole.folded) << "batch " << batch;
+        invalid += whole.valid() ? 0 : 1;
+    }
+    return invalid;
+}
+
+TEST(IncrementalValidity, ReportsWhatTheWholeCheckReportsAfterEveryMove) {
+    const DigitalSurface ball = extract_digital_surface(test::make_ball(14, 5, 6.5), Connectivity::TwentySix);
+    EXPECT_GT(incremental_against_whole(ball, 7), 30);
+    // A label complex: junction edges shared by three faces and more.
+    const DigitalSurface labels = extract_digital_surface(test::sectors_and_small_parts(), Connectivity::TwentySix);
+    EXPECT_GT(incremental_against_whole(labels, 11), 30);
 }
 
 TEST(MeshValidity, OverlappingCubesIntersectOnExactlyTheFacesThatCross) {

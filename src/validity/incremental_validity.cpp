@@ -6,6 +6,8 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "triangle_predicates.hpp"
+
 #include "dsreg/evaluation.hpp"
 
 namespace dsreg::validity_internal {
@@ -63,19 +65,19 @@ public:
         for_cells(boxes_[std::size_t(t)], [&](std::int64_t key) { cells_[key].push_back(t); });
     }
 
-    /// Triangles whose box overlaps the box of triangle t (t included) and not yet `seen`,
-    /// appended to `out` and marked seen.
-    void query(std::int64_t t, std::vector<char>& seen, std::vector<std::int64_t>& out) const {
+    /// Appends the triangles other than t whose boxes meet the box of triangle t, each once
+    /// (sorted). Safe to call from several threads.
+    void overlapping(std::int64_t t, std::vector<std::int64_t>& out) const {
+        const std::size_t first = out.size();
         const Box& box = boxes_[std::size_t(t)];
         for_cells(box, [&](std::int64_t key) {
             const auto it = cells_.find(key);
             if (it == cells_.end()) return;
             for (const std::int64_t other : it->second)
-                if (!seen[std::size_t(other)] && boxes_[std::size_t(other)].overlaps(box)) {
-                    seen[std::size_t(other)] = 1;
-                    out.push_back(other);
-                }
+                if (other != t && boxes_[std::size_t(other)].overlaps(box)) out.push_back(other);
         });
+        std::sort(out.begin() + std::ptrdiff_t(first), out.end());
+        out.erase(std::unique(out.begin() + std::ptrdiff_t(first), out.end()), out.end());
     }
 
 private:
@@ -142,41 +144,43 @@ void IncrementalValidity::retest(const PointMatrix& vertices, const std::vector<
     }
     for (const std::int32_t k : faces_folded_against_field(vertices, subset, subset_field)) folded_[std::size_t(quads_to_test[std::size_t(k)])] = 1;
 
-    // The changed triangles and every triangle whose box meets one of theirs.
+    // The pairs of a changed triangle and a triangle whose box meets its box, each decided once
+    // by the rule of triangle_self_intersections (degenerate triangles take part in no pair).
     if (!grid_) grid_ = std::make_unique<BoxGrid>(vertices, triangles_);
     for (const std::int64_t t : changed) grid_->move(vertices, triangles_, t);
-    std::vector<char> seen(std::size_t(triangles_.rows()), 0);
-    std::vector<std::int64_t> tested;
-    for (const std::int64_t t : changed) grid_->query(t, seen, tested);
-    std::sort(tested.begin(), tested.end());
-
-    // Test them together, on compact vertex indices (shared indices stay shared).
-    std::unordered_map<std::int32_t, std::int32_t> local;
-    PointMatrix sub_vertices(Eigen::Index(3 * tested.size()), 3);
-    FaceMatrix sub_triangles(Eigen::Index(tested.size()), 3);
-    for (std::size_t k = 0; k < tested.size(); ++k)
-        for (int c = 0; c < 3; ++c) {
-            const std::int32_t v = triangles_(tested[k], c);
-            const auto [it, inserted] = local.emplace(v, std::int32_t(local.size()));
-            if (inserted) sub_vertices.row(it->second) = vertices.row(v);
-            sub_triangles(Eigen::Index(k), c) = it->second;
-        }
-    sub_vertices.conservativeResize(Eigen::Index(local.size()), 3);
-    const TriangleSelfIntersections found = triangle_self_intersections(sub_vertices, sub_triangles);
-
     std::vector<char> is_changed(std::size_t(triangles_.rows()), 0);
     for (const std::int64_t t : changed) is_changed[std::size_t(t)] = 1;
+    const std::int64_t count = std::int64_t(changed.size());
+#pragma omp parallel for schedule(static) if (count > 4096)
+    for (std::int64_t k = 0; k < count; ++k)
+        degenerate_[std::size_t(changed[std::size_t(k)])] = triangle_is_degenerate(vertices, triangles_, changed[std::size_t(k)]);
+    std::vector<std::pair<std::int64_t, std::int64_t>> found;
+#pragma omp parallel if (count > 1024)
+    {
+        std::vector<std::pair<std::int64_t, std::int64_t>> mine;
+        std::vector<std::int64_t> near;
+#pragma omp for schedule(dynamic, 256) nowait
+        for (std::int64_t k = 0; k < count; ++k) {
+            const std::int64_t t = changed[std::size_t(k)];
+            if (degenerate_[std::size_t(t)]) continue;
+            near.clear();
+            grid_->overlapping(t, near);
+            for (const std::int64_t other : near) {
+                if (degenerate_[std::size_t(other)] || (is_changed[std::size_t(other)] && other < t)) continue;
+                if (triangles_meet_beyond_shared_indices(vertices, triangles_, t, other))
+                    mine.emplace_back(std::min(t, other), std::max(t, other));
+            }
+        }
+#pragma omp critical
+        found.insert(found.end(), mine.begin(), mine.end());
+    }
+
     std::vector<std::pair<std::int64_t, std::int64_t>> kept;
     for (const auto& pair : pairs_)
         if (!is_changed[std::size_t(pair.first)] && !is_changed[std::size_t(pair.second)]) kept.push_back(pair);
-    for (const auto& [a, b] : found.pairs) {
-        const std::int64_t ta = tested[std::size_t(a)], tb = tested[std::size_t(b)];
-        if (is_changed[std::size_t(ta)] || is_changed[std::size_t(tb)]) kept.emplace_back(std::min(ta, tb), std::max(ta, tb));
-    }
+    kept.insert(kept.end(), found.begin(), found.end());
     std::sort(kept.begin(), kept.end());
     pairs_.swap(kept);
-    for (const std::int64_t t : changed) degenerate_[std::size_t(t)] = 0;
-    for (const std::int64_t t : found.degenerate) degenerate_[std::size_t(tested[std::size_t(t)])] = 1;
 }
 
 MeshValidity IncrementalValidity::validity() const {
