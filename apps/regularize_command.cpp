@@ -138,6 +138,9 @@ void apply_block_flags(RegularizeCommand& c) {
     }
     if (!blocks.enabled() && blocks.halo) throw Error("--block-halo only applies with --block-size");
     if (!blocks.enabled() && blocks.schwarz_sweeps != 0) throw Error("--schwarz-sweeps only applies with --block-size");
+    if (blocks.coarse_spacing < 0) throw Error("--coarse-spacing must be zero (off) or positive");
+    if (!blocks.enabled() && blocks.coarse_spacing != BlockOptions().coarse_spacing)
+        throw Error("--coarse-spacing only applies with --block-size");
 }
 
 }  // namespace
@@ -268,6 +271,10 @@ void add_block_flags(CLI::App& command, RegularizeCommand& c) {
     command.add_option("--schwarz-sweeps", c.options.blocks.schwarz_sweeps,
                        "Overlapping Schwarz sweeps after the first block-wise pass: each brings the mesh closer to the "
                        "whole-volume solve")
+        ->capture_default_str();
+    command.add_option("--coarse-spacing", c.options.blocks.coarse_spacing,
+                       "Two-level correction of block-wise runs: after the first pass and after each Schwarz sweep, "
+                       "the Galerkin correction on a lattice of nodes this many voxels apart (trilinear; 0: off)")
         ->capture_default_str();
     command.add_option("--fragments", c.outputs.fragments,
                        "Block-wise runs: also write one PLY mesh per block (vertex property 'key': global vertex id) "

@@ -43,7 +43,7 @@ struct RegularizeCommand {
 /// `dsreg regularize` and the Python module's keyword options (dsreg.regularize) both parse them.
 void add_pipeline_flags(CLI::App& command, RegularizeCommand& c);
 
-/// Registers the flags of block-wise runs (--block-size, --block-halo, --schwarz-sweeps,
+/// Registers the flags of block-wise runs (--block-size, --block-halo, --schwarz-sweeps, --coarse-spacing,
 /// --fragments; include/dsreg/block_pipeline.hpp, docs/scaling.md) on `command`, writing into
 /// `c`. Not keyword options of the Python module: block-wise runs stream a volume file, and its
 /// arrays are in memory already.

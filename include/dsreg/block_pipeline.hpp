@@ -22,6 +22,7 @@
 // so pessimistic for the largest one, docs/scaling.md); it costs one more pass without halos.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -92,6 +93,82 @@ SolveReport solve_patch_free(const BlockStages& block, Eigen::VectorXd& x, const
 /// the fairness of the owned vertices whose faces are all such faces. M = Σ_b M_b ≤ R (only
 /// positive semi-definite terms are left out), so Σ_b rᵀ M_b⁻¹ r ≥ rᵀ R⁻¹ r = ‖x̃ − x*‖²_R.
 double owned_energy_norm_bound(const BlockStages& block, const Eigen::VectorXd& residual, const SolverOptions& solver);
+
+// Two-level correction (--coarse-spacing a). The error a block pass leaves is smooth (it varies
+// over ℓ edges), which one-level Schwarz removes slowly. The coarse space: a lattice of nodes
+// every a voxels over the grid's pointels; a vertex at pointel q moves by the trilinear
+// interpolation of the displacements of the 8 nodes around q (3 unknowns per node: P =
+// P_scalar ⊗ I3). Its weights depend on the vertex's global key alone, so every block computes
+// the same P. The correction x̃ ← x̃ + P e with C e = g, C = Pᵀ R P, g = Pᵀ (b − R x̃), is the
+// Galerkin (R-orthogonal) projection of the error x* − x̃ onto range(P): it minimizes the energy
+// ½ xᵀRx − bᵀx over x̃ + range(P), so the energy cannot go up (it falls by ½ gᵀe). C and g are
+// sums over the blocks of the owned rows of R (exact in a block without halo), as for the bound.
+
+/// The lattice of the coarse space over a grid of `dims` voxels.
+struct CoarseLattice {
+    Index3 dims{0, 0, 0};
+    std::int64_t spacing = 0;  ///< voxels between nodes (> 0)
+
+    /// The nodes with a non-zero trilinear weight at the vertex named `vertex_key` (1 to 8 of
+    /// them; the weights sum to 1), named by their linear index on the lattice.
+    struct Stencil {
+        std::array<std::int64_t, 8> nodes{};
+        std::array<double, 8> weights{};
+        int count = 0;
+    };
+    Stencil stencil(std::int64_t vertex_key) const;
+};
+
+/// One block's share of the coarse system, on the nodes its patch's vertices touch.
+struct CoarseShare {
+    std::vector<std::int64_t> nodes;       ///< lattice nodes, ascending (local index = position)
+    Eigen::SparseMatrix<double> galerkin;  ///< P_ownedᵀ R P: 3 unknowns per node, interleaved
+    Eigen::SparseMatrix<double> gram;      ///< P_owned,scalarᵀ P_owned,scalar (one entry per node pair)
+    Eigen::VectorXd residual;              ///< P_ownedᵀ (b − R x̃), 3 per node
+    double energy = 0;                     ///< Σ over the owned vertices of ½ x̃ᵀ(R x̃) − bᵀx̃
+};
+
+/// The share of `block` (whose owned rows of R are exact) at positions x (3 entries per patch
+/// vertex), given the residual rows r = R x − b of its owned vertices (zero elsewhere).
+CoarseShare coarse_share(const BlockStages& block, const CoarseLattice& lattice, const Eigen::VectorXd& x,
+                         const Eigen::VectorXd& owned_residual);
+
+/// The coarse correction e (3 entries per node) of the shares summed.
+struct CoarseSolution {
+    std::vector<std::int64_t> nodes;  ///< every node touched, ascending
+    Eigen::VectorXd correction;       ///< 3 per node; 0 at the dropped nodes
+    std::int64_t dropped_nodes = 0;   ///< nodes whose columns of P depend on the others' (see solve)
+    double energy_before = 0;         ///< ½ x̃ᵀRx̃ − bᵀx̃
+    double energy_decrease = 0;       ///< ½ gᵀe ≥ 0
+
+    /// (P e) at the vertex named `vertex_key`.
+    Eigen::Vector3d displacement(const CoarseLattice& lattice, std::int64_t vertex_key) const;
+};
+
+/// The coarse system summed over the blocks (global triplets, merged as they come: memory about
+/// nodes × 27 × (9 + 1) entries).
+class CoarseSystem {
+public:
+    void add(const CoarseShare& share);
+    /// Solves C e = g by CHOLMOD on the nodes whose columns of P are independent: a node whose
+    /// column of P_scalar lies (to rounding) in the span of the others' adds nothing to range(P)
+    /// and would make C singular; such nodes are found from the pivots of an LDLᵀ of PᵀP and
+    /// dropped. C = Pᵀ R P ⪰ λ_min(R) PᵀP ⊗ I3 is then positive definite.
+    /// The entries are merged in place.
+    CoarseSolution solve();
+
+private:
+    struct Entry {
+        std::int64_t row, column;
+        double value;
+    };
+    static void merge(std::vector<Entry>& entries);
+    static void add_matrix(std::vector<Entry>& entries, const Eigen::SparseMatrix<double>& m, const std::vector<std::int64_t>& nodes,
+                    int per_node);
+    std::vector<Entry> galerkin_, gram_, residual_;
+    std::size_t merged_size_ = 0;
+    double energy_ = 0;
+};
 
 /// The parts of a welded run that the blocks computed.
 struct WeldedRun {

@@ -245,6 +245,9 @@ struct BlockOptions {
     Index3 block_size{0, 0, 0};        ///< --block-size (voxels); 0: the whole volume at once
     std::optional<std::int64_t> halo;  ///< --block-halo (voxels); unset: default_block_halo
     int schwarz_sweeps = 0;            ///< --schwarz-sweeps: overlapping Schwarz sweeps after the first pass
+    /// --coarse-spacing (voxels; 0: off): the two-level correction on a lattice of nodes this far
+    /// apart after the first pass and after each sweep (block_pipeline.hpp)
+    std::int64_t coarse_spacing = 0;
 
     bool enabled() const { return block_size[0] > 0; }
 };

@@ -45,6 +45,13 @@ public:
 
     const PointMatrix& positions(std::int64_t block) const { return positions_[std::size_t(block)]; }
 
+    /// x̃ += P e at every stored vertex.
+    void add_coarse_correction(const CoarseLattice& lattice, const CoarseSolution& solution) {
+        for (std::size_t block = 0; block < keys_.size(); ++block)
+            for (std::size_t i = 0; i < keys_[block].size(); ++i)
+                positions_[block].row(std::int64_t(i)) += solution.displacement(lattice, keys_[block][i]).transpose();
+    }
+
 private:
     const BlockLayout& layout_;
     std::vector<std::vector<std::int64_t>> keys_;
@@ -147,9 +154,9 @@ void report_pass(const ProgressCallback& progress, const std::string& name, int 
                     name + ", block " + std::to_string(done) + "/" + std::to_string(count));
 }
 
-/// One pass over the blocks: the first (free boundaries, sweep 0) or a Schwarz sweep.
+/// One pass over the blocks, the `pass`-th: the first (free boundaries, sweep 0) or a Schwarz sweep.
 void solve_pass(const VolumeSource& source, const BlockPlan& plan, const BlockLayout& layout, std::int64_t halo, int sweep,
-                int passes, const SolverOptions& solver, StreamingState& state, const ProgressCallback& progress) {
+                int pass, int passes, const SolverOptions& solver, StreamingState& state, const ProgressCallback& progress) {
     double solve_seconds = 0;
     int iterations = 0;
     const std::string name = sweep == 0 ? "first pass" : "Schwarz sweep " + std::to_string(sweep);
@@ -157,7 +164,7 @@ void solve_pass(const VolumeSource& source, const BlockPlan& plan, const BlockLa
         const VoxelBox owned = layout.box(block);
         const BlockStages b = run_block_stages(source, plan, owned, owned.grown(halo).clipped(layout.dims));
         state.times.add(b);
-        report_pass(progress, name, sweep, passes, block + 1, layout.block_count());
+        report_pass(progress, name, pass, passes, block + 1, layout.block_count());
         if (sweep == 0) state.run.object_voxels += b.owned_object_voxels;
         if (!has_owned_faces(b.patch)) continue;
         Eigen::VectorXd x = current_positions(b.patch, state.store);
@@ -184,6 +191,34 @@ void solve_pass(const VolumeSource& source, const BlockPlan& plan, const BlockLa
                             {"iterations", iterations}});
 }
 
+/// The two-level step, the `pass`-th pass: the coarse system summed over the blocks without
+/// halos (the owned rows of R are exact there, as in the bound pass), solved once, and x̃ += P e
+/// at every stored vertex. Returns what the report keeps of it.
+nlohmann::json coarse_pass(const VolumeSource& source, const BlockPlan& plan, const BlockLayout& layout,
+                           const CoarseLattice& lattice, int pass, int passes, StreamingState& state,
+                           const ProgressCallback& progress) {
+    const auto started = std::chrono::steady_clock::now();
+    CoarseSystem system;
+    for (std::int64_t block = 0; block < layout.block_count(); ++block) {
+        const VoxelBox owned = layout.box(block);
+        const BlockStages b = run_block_stages(source, plan, owned, owned);
+        state.times.add(b);
+        report_pass(progress, "coarse correction", pass, passes, block + 1, layout.block_count());
+        if (!has_owned_faces(b.patch)) continue;
+        const Eigen::VectorXd x = current_positions(b.patch, state.store);
+        system.add(coarse_share(b, lattice, x, owned_residual(b, x)));
+    }
+    const auto solve_started = std::chrono::steady_clock::now();
+    const CoarseSolution solution = system.solve();
+    state.store.add_coarse_correction(lattice, solution);
+    state.run.solve_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - solve_started).count();
+    return {{"nodes", std::int64_t(solution.nodes.size())},
+            {"dropped_nodes", solution.dropped_nodes},
+            {"energy_before", solution.energy_before},
+            {"energy_after", solution.energy_before - solution.energy_decrease},
+            {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()}};
+}
+
 /// The bound pass: the residual rows at the welded vertices, block by block on blocks centred
 /// on the seams, where the residual is (inside a block, x̃ solves the block's equations), so that
 /// M_b keeps the couplings across each seam (no halo needed).
@@ -201,6 +236,30 @@ BoundTally bound_pass(const VolumeSource& source, const BlockPlan& plan, const B
     return tally;
 }
 
+/// The report's blocks.coarse: the lattice, the last coarse system's size, the time of every
+/// coarse pass, the energy before the first correction and after the last, each correction.
+nlohmann::json coarse_report(std::int64_t spacing, const nlohmann::json& corrections) {
+    nlohmann::json report = {{"spacing_voxels", spacing}, {"corrections", corrections}};
+    if (corrections.empty()) return report;
+    double seconds = 0;
+    for (const auto& c : corrections) seconds += c["seconds"].get<double>();
+    report["nodes"] = corrections.back()["nodes"];
+    report["dropped_nodes"] = corrections.back()["dropped_nodes"];
+    report["seconds"] = seconds;
+    report["energy_before"] = corrections.front()["energy_before"];
+    report["energy_after"] = corrections.back()["energy_after"];
+    return report;
+}
+
+/// ", coarse correction every 8 voxels (2 × 5012 nodes, 1.3 s)" in the regularize stage's detail.
+std::string coarse_detail(std::int64_t spacing, const nlohmann::json& corrections) {
+    if (corrections.empty()) return "";
+    const nlohmann::json report = coarse_report(spacing, corrections);
+    return ", coarse correction every " + std::to_string(spacing) + " voxels (" + std::to_string(corrections.size()) +
+           " × " + std::to_string(report["nodes"].get<std::int64_t>()) + " nodes, " +
+           format("%.1f", report["seconds"].get<double>()) + " s)";
+}
+
 }  // namespace
 
 PipelineResult run_streaming_pipeline(const VolumeSource& source, const PipelineOptions& options,
@@ -210,6 +269,7 @@ PipelineResult run_streaming_pipeline(const VolumeSource& source, const Pipeline
         if (bo.block_size[a] <= 0) throw Error("--block-size: every block size must be positive");
     if (bo.halo && *bo.halo < 0) throw Error("--block-halo must be zero or positive");
     if (bo.schwarz_sweeps < 0) throw Error("--schwarz-sweeps must be zero or positive");
+    if (bo.coarse_spacing < 0) throw Error("--coarse-spacing must be zero (off) or positive");
     const BlockPlan plan = plan_block_run(source, options, "--block-size");
     const VoxelGrid& grid = plan.header.volume.grid;
     const BlockLayout layout = blocks_of_size(grid.dims, bo.block_size);
@@ -219,10 +279,16 @@ PipelineResult run_streaming_pipeline(const VolumeSource& source, const Pipeline
     solver.max_error = options.max_error_voxels * grid.spacing.minCoeff();
 
     StreamingState state(layout);
-    const int passes = 2 + bo.schwarz_sweeps;  // first, sweeps, bound
-    for (int sweep = 0; sweep <= bo.schwarz_sweeps; ++sweep)
-        solve_pass(source, plan, layout, halo, sweep, passes, solver, state, progress);
-    if (state.blocks_with_surface == 0) throw empty_object_error(source, false);
+    const CoarseLattice lattice{grid.dims, bo.coarse_spacing};
+    const bool coarse = bo.coarse_spacing > 0;
+    const int passes = (2 + bo.schwarz_sweeps) + (coarse ? 1 + bo.schwarz_sweeps : 0);  // first, sweeps, coarse, bound
+    int pass = 0;
+    nlohmann::json corrections = nlohmann::json::array();
+    for (int sweep = 0; sweep <= bo.schwarz_sweeps; ++sweep) {
+        solve_pass(source, plan, layout, halo, sweep, pass++, passes, solver, state, progress);
+        if (state.blocks_with_surface == 0) throw empty_object_error(source, false);
+        if (coarse) corrections.push_back(coarse_pass(source, plan, layout, lattice, pass++, passes, state, progress));
+    }
     const auto bound_started = std::chrono::steady_clock::now();
     const BoundTally tally = bound_pass(source, plan, layout, passes, solver, state, progress);
     const double bound_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - bound_started).count();
@@ -242,6 +308,7 @@ PipelineResult run_streaming_pipeline(const VolumeSource& source, const Pipeline
                   {"blocks_with_surface", state.blocks_with_surface},
                   {"schwarz_sweeps", bo.schwarz_sweeps},
                   {"passes", state.passes},
+                  {"coarse", coarse_report(bo.coarse_spacing, corrections)},
                   {"bound_seconds", bound_seconds},
                   {"largest_block_read_voxels", state.largest_read},
                   {"largest_block_patch_faces", state.largest_patch},
@@ -263,7 +330,8 @@ PipelineResult run_streaming_pipeline(const VolumeSource& source, const Pipeline
     finish_stage(progress, "normals", t.normals, run.field.description);
     finish_stage(progress, "regularize", t.regularize + run.solve_seconds,
                  run.solve.solver + ", halo " + std::to_string(halo) + " voxels, first pass + " +
-                     std::to_string(bo.schwarz_sweeps) + " Schwarz sweeps, error bound " +
+                     std::to_string(bo.schwarz_sweeps) + " Schwarz sweeps" + coarse_detail(bo.coarse_spacing, corrections) +
+                     ", error bound " +
                      format("%.2e", run.solve.error_bound / voxel) + " voxel");
     finish_stage(progress, "weld", weld_seconds, surfels + ", " + std::to_string(run.welded.surface.component_count) + " components");
     PipelineResult result = welded_pipeline_result(std::move(run), plan);
