@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,8 @@ struct CliFlags {
     std::uint64_t raw_header_bytes = 0;
     std::vector<double> spacing;
     std::vector<std::int64_t> block_size;  ///< --block-size N or X,Y,Z
+    std::optional<std::int64_t> coarse_spacing;  ///< --coarse-spacing (unset: BlockOptions' default)
+    std::string coarse_space = "normals";        ///< --coarse-space normals|xyz
     std::string solver = "auto";
     int connectivity = 26;
     std::string space = "lps";

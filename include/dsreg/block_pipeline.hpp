@@ -121,28 +121,34 @@ struct CoarseLattice {
 
 /// One block's share of the coarse system, on the nodes its patch's vertices touch.
 struct CoarseShare {
+    int unknowns_per_node = 3;             ///< 3 (P = P_scalar ⊗ I3) or 1 (along the vertices' directions)
     std::vector<std::int64_t> nodes;       ///< lattice nodes, ascending (local index = position)
-    Eigen::SparseMatrix<double> galerkin;  ///< P_ownedᵀ R P: 3 unknowns per node, interleaved
+    Eigen::SparseMatrix<double> galerkin;  ///< P_ownedᵀ R P, unknowns of a node interleaved
     Eigen::SparseMatrix<double> gram;      ///< P_owned,scalarᵀ P_owned,scalar (one entry per node pair)
-    Eigen::VectorXd residual;              ///< P_ownedᵀ (b − R x̃), 3 per node
+    Eigen::VectorXd residual;              ///< P_ownedᵀ (b − R x̃)
     double energy = 0;                     ///< Σ over the owned vertices of ½ x̃ᵀ(R x̃) − bᵀx̃
 };
 
 /// The share of `block` (whose owned rows of R are exact) at positions x (3 entries per patch
 /// vertex), given the residual rows r = R x − b of its owned vertices (zero elsewhere).
+/// `directions`: empty for the coarse space of displacements in every direction (P = P_scalar ⊗
+/// I3), or one unit row per patch vertex d_v for the space of displacements along them (P's row
+/// block of v: d_v times the row v of P_scalar; one unknown per node).
 CoarseShare coarse_share(const BlockStages& block, const CoarseLattice& lattice, const Eigen::VectorXd& x,
-                         const Eigen::VectorXd& owned_residual);
+                         const Eigen::VectorXd& owned_residual, const PointMatrix& directions = PointMatrix());
 
 /// The coarse correction e (3 entries per node) of the shares summed.
 struct CoarseSolution {
+    int unknowns_per_node = 3;
     std::vector<std::int64_t> nodes;  ///< every node touched, ascending
-    Eigen::VectorXd correction;       ///< 3 per node; 0 at the dropped nodes
+    Eigen::VectorXd correction;       ///< unknowns_per_node per node; 0 at the dropped nodes
     std::int64_t dropped_nodes = 0;   ///< nodes whose columns of P depend on the others' (see solve)
     double energy_before = 0;         ///< ½ x̃ᵀRx̃ − bᵀx̃
     double energy_decrease = 0;       ///< ½ gᵀe ≥ 0
 
-    /// (P e) at the vertex named `vertex_key`.
-    Eigen::Vector3d displacement(const CoarseLattice& lattice, std::int64_t vertex_key) const;
+    /// (P e) at the vertex named `vertex_key`, whose direction is `direction` (one unknown per node).
+    Eigen::Vector3d displacement(const CoarseLattice& lattice, std::int64_t vertex_key,
+                                 const Eigen::Vector3d& direction = Eigen::Vector3d::Zero()) const;
 };
 
 /// The coarse system summed over the blocks (global triplets, merged as they come: memory about
@@ -167,6 +173,7 @@ private:
                     int per_node);
     std::vector<Entry> galerkin_, gram_, residual_;
     std::size_t merged_size_ = 0;
+    int unknowns_per_node_ = 3;
     double energy_ = 0;
 };
 

@@ -87,6 +87,7 @@ EXCLUDED_REGULARIZE_FLAGS = {
     "block-halo": "a flag of block-wise streaming (dsreg regularize --block-size)",
     "schwarz-sweeps": "a flag of block-wise streaming (dsreg regularize --block-size)",
     "coarse-spacing": "a flag of block-wise streaming (dsreg regularize --block-size)",
+    "coarse-space": "a flag of block-wise streaming (dsreg regularize --block-size)",
     "fragments": "a flag of block-wise streaming (dsreg regularize --block-size)",
 }
 

@@ -116,11 +116,13 @@ CoarseLattice::Stencil CoarseLattice::stencil(std::int64_t vertex_key) const {
 }
 
 CoarseShare coarse_share(const BlockStages& block, const CoarseLattice& lattice, const Eigen::VectorXd& x,
-                         const Eigen::VectorXd& owned_residual) {
+                         const Eigen::VectorXd& owned_residual, const PointMatrix& directions) {
     const SurfacePatch& patch = block.patch;
     const std::int64_t n = patch.vertex_count();
     std::vector<CoarseLattice::Stencil> stencils(static_cast<std::size_t>(n));
     CoarseShare share;
+    const bool along = directions.rows() > 0;
+    const int k3 = share.unknowns_per_node = along ? 1 : 3;
     for (std::int64_t i = 0; i < n; ++i) {
         stencils[std::size_t(i)] = lattice.stencil(patch.vertex_keys[std::size_t(i)]);
         const auto& s = stencils[std::size_t(i)];
@@ -129,7 +131,7 @@ CoarseShare coarse_share(const BlockStages& block, const CoarseLattice& lattice,
     std::sort(share.nodes.begin(), share.nodes.end());
     share.nodes.erase(std::unique(share.nodes.begin(), share.nodes.end()), share.nodes.end());
     const std::int64_t m = std::int64_t(share.nodes.size());
-    // P = P_scalar ⊗ I3 on the patch's vertices, and its owned rows (the others zero).
+    // P on the patch's vertices, and its owned rows (the others zero).
     std::vector<Eigen::Triplet<double>> all, owned, owned_scalar;
     for (std::int64_t i = 0; i < n; ++i) {
         const auto& s = stencils[std::size_t(i)];
@@ -138,13 +140,15 @@ CoarseShare coarse_share(const BlockStages& block, const CoarseLattice& lattice,
             const std::int64_t node = local_index(share.nodes, s.nodes[std::size_t(k)]);
             const double w = s.weights[std::size_t(k)];
             for (int d = 0; d < 3; ++d) {
-                all.emplace_back(Eigen::Index(3 * i + d), Eigen::Index(3 * node + d), w);
-                if (is_owned) owned.emplace_back(Eigen::Index(3 * i + d), Eigen::Index(3 * node + d), w);
+                const Eigen::Index column = along ? Eigen::Index(node) : Eigen::Index(3 * node + d);
+                const double value = along ? w * directions(i, d) : w;
+                all.emplace_back(Eigen::Index(3 * i + d), column, value);
+                if (is_owned) owned.emplace_back(Eigen::Index(3 * i + d), column, value);
             }
             if (is_owned) owned_scalar.emplace_back(Eigen::Index(i), Eigen::Index(node), w);
         }
     }
-    Eigen::SparseMatrix<double> P(3 * n, 3 * m), P_owned(3 * n, 3 * m), P_scalar(n, m);
+    Eigen::SparseMatrix<double> P(3 * n, k3 * m), P_owned(3 * n, k3 * m), P_scalar(n, m);
     P.setFromTriplets(all.begin(), all.end());
     P_owned.setFromTriplets(owned.begin(), owned.end());
     P_scalar.setFromTriplets(owned_scalar.begin(), owned_scalar.end());
@@ -161,13 +165,16 @@ CoarseShare coarse_share(const BlockStages& block, const CoarseLattice& lattice,
     return share;
 }
 
-Eigen::Vector3d CoarseSolution::displacement(const CoarseLattice& lattice, std::int64_t vertex_key) const {
+Eigen::Vector3d CoarseSolution::displacement(const CoarseLattice& lattice, std::int64_t vertex_key,
+                                             const Eigen::Vector3d& direction) const {
     const CoarseLattice::Stencil s = lattice.stencil(vertex_key);
     Eigen::Vector3d d = Eigen::Vector3d::Zero();
     for (int k = 0; k < s.count; ++k) {
         const std::int64_t node = s.nodes[std::size_t(k)];
         if (!contains(nodes, node)) throw Error("coarse correction: a vertex's node is not in the coarse system (internal error)");
-        d += s.weights[std::size_t(k)] * correction.segment<3>(3 * local_index(nodes, node));
+        const std::int64_t i = local_index(nodes, node);
+        d += s.weights[std::size_t(k)] *
+             (unknowns_per_node == 3 ? Eigen::Vector3d(correction.segment<3>(3 * i)) : Eigen::Vector3d(correction[i] * direction));
     }
     return d;
 }
@@ -194,10 +201,11 @@ void CoarseSystem::add_matrix(std::vector<Entry>& entries, const Eigen::SparseMa
 }
 
 void CoarseSystem::add(const CoarseShare& share) {
-    add_matrix(galerkin_, share.galerkin, share.nodes, 3);
+    const int k = unknowns_per_node_ = share.unknowns_per_node;
+    add_matrix(galerkin_, share.galerkin, share.nodes, k);
     add_matrix(gram_, share.gram, share.nodes, 1);
     for (Eigen::Index i = 0; i < share.residual.size(); ++i)
-        residual_.push_back({3 * share.nodes[std::size_t(i / 3)] + i % 3, 0, share.residual[i]});
+        residual_.push_back({k * share.nodes[std::size_t(i / k)] + i % k, 0, share.residual[i]});
     energy_ += share.energy;
     if (galerkin_.size() > 2 * merged_size_ + (std::size_t(1) << 20)) {  // neighbouring blocks share nodes
         merge(galerkin_), merge(gram_), merge(residual_);
@@ -208,11 +216,12 @@ void CoarseSystem::add(const CoarseShare& share) {
 CoarseSolution CoarseSystem::solve() {
     merge(galerkin_), merge(gram_), merge(residual_);
     CoarseSolution solution;
+    const int k = solution.unknowns_per_node = unknowns_per_node_;
     solution.energy_before = energy_;
     for (const Entry& e : gram_)
         if (solution.nodes.empty() || solution.nodes.back() != e.row) solution.nodes.push_back(e.row);  // rows sorted
     const std::int64_t n = std::int64_t(solution.nodes.size());
-    solution.correction = Eigen::VectorXd::Zero(3 * n);
+    solution.correction = Eigen::VectorXd::Zero(k * n);
     if (n == 0) return solution;
     const auto to_matrix = [&](const std::vector<Entry>& entries, int per_node) {
         const auto local = [&](std::int64_t global) {
@@ -226,15 +235,15 @@ CoarseSolution CoarseSystem::solve() {
         return m;
     };
     const std::vector<char> kept = independent_nodes(to_matrix(gram_, 1));
-    std::vector<char> kept_unknowns(std::size_t(3 * n));
-    for (std::size_t i = 0; i < kept_unknowns.size(); ++i) kept_unknowns[i] = kept[i / 3];
+    std::vector<char> kept_unknowns(std::size_t(k * n));
+    for (std::size_t i = 0; i < kept_unknowns.size(); ++i) kept_unknowns[i] = kept[i / std::size_t(k)];
     std::vector<std::int64_t> new_index;
     const std::int64_t unknowns = renumber(kept_unknowns, new_index);
-    solution.dropped_nodes = n - unknowns / 3;
-    const Eigen::SparseMatrix<double> C = kept_part(to_matrix(galerkin_, 3), new_index, unknowns);
+    solution.dropped_nodes = n - unknowns / k;
+    const Eigen::SparseMatrix<double> C = kept_part(to_matrix(galerkin_, k), new_index, unknowns);
     Eigen::VectorXd g = Eigen::VectorXd::Zero(unknowns);
     for (const Entry& e : residual_) {
-        const std::int64_t i = new_index[std::size_t(3 * local_index(solution.nodes, e.row / 3) + e.row % 3)];
+        const std::int64_t i = new_index[std::size_t(k * local_index(solution.nodes, e.row / k) + e.row % k)];
         if (i >= 0) g[i] = e.value;
     }
     SolverOptions direct;

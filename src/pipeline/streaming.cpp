@@ -45,11 +45,21 @@ public:
 
     const PointMatrix& positions(std::int64_t block) const { return positions_[std::size_t(block)]; }
 
-    /// x̃ += P e at every stored vertex.
-    void add_coarse_correction(const CoarseLattice& lattice, const CoarseSolution& solution) {
-        for (std::size_t block = 0; block < keys_.size(); ++block)
-            for (std::size_t i = 0; i < keys_[block].size(); ++i)
-                positions_[block].row(std::int64_t(i)) += solution.displacement(lattice, keys_[block][i]).transpose();
+    /// x̃ += P e at every stored vertex; the direction of a vertex (coarse space along the normals)
+    /// is the field on its key surfel, a face of the same block's piece.
+    void add_coarse_correction(const CoarseLattice& lattice, const CoarseSolution& solution,
+                               const std::vector<BlockPiece>& pieces) {
+        for (std::size_t block = 0; block < keys_.size(); ++block) {
+            const BlockPiece& piece = pieces[block];
+            for (std::size_t i = 0; i < keys_[block].size(); ++i) {
+                Eigen::Vector3d direction = Eigen::Vector3d::Zero();
+                if (solution.unknowns_per_node == 1) {
+                    const auto face = std::lower_bound(piece.face_keys.begin(), piece.face_keys.end(), keys_[block][i] / 4);
+                    direction = piece.face_normals.row(face - piece.face_keys.begin()).transpose();
+                }
+                positions_[block].row(std::int64_t(i)) += solution.displacement(lattice, keys_[block][i], direction).transpose();
+            }
+        }
     }
 
 private:
@@ -191,26 +201,52 @@ void solve_pass(const VolumeSource& source, const BlockPlan& plan, const BlockLa
                             {"iterations", iterations}});
 }
 
+/// The field u on the key surfel of each patch vertex (its owner's face; zero where that face is
+/// not in the patch): the direction of the coarse space along the normals. The same in every
+/// block for the row vertices (the field is exact on their faces); throws unless every vertex of
+/// an owned row of R is one.
+PointMatrix key_face_normals(const BlockStages& b) {
+    const SurfacePatch& patch = b.patch;
+    PointMatrix directions = PointMatrix::Zero(patch.vertex_count(), 3);
+    for (std::int64_t i = 0; i < patch.vertex_count(); ++i) {
+        const std::int64_t key = patch.vertex_keys[std::size_t(i)] / 4;
+        const auto face = std::lower_bound(patch.face_keys.begin(), patch.face_keys.end(), key);
+        if (face != patch.face_keys.end() && *face == key) directions.row(i) = b.field.normals.row(face - patch.face_keys.begin());
+    }
+    for (std::int64_t j = 0; j < patch.vertex_count(); ++j) {
+        if (!patch.vertex_owned[std::size_t(j)]) continue;
+        for (Eigen::SparseMatrix<double>::InnerIterator it(b.system.matrix, Eigen::Index(3 * j)); it; ++it)
+            if (!patch.vertex_row[std::size_t(it.row() / 3)])
+                throw Error("coarse correction: a vertex of an owned row has no exact row (internal error)");
+    }
+    return directions;
+}
+
+/// Voxels around a block's owned box whose vertices get exact rows in the coarse pass: the
+/// vertices of the owned rows lie within two edges of an owned vertex, their key voxels within 4.
+constexpr std::int64_t kCoarseRowsMargin = 4;
+
 /// The two-level step, the `pass`-th pass: the coarse system summed over the blocks without
 /// halos (the owned rows of R are exact there, as in the bound pass), solved once, and x̃ += P e
 /// at every stored vertex. Returns what the report keeps of it.
 nlohmann::json coarse_pass(const VolumeSource& source, const BlockPlan& plan, const BlockLayout& layout,
-                           const CoarseLattice& lattice, int pass, int passes, StreamingState& state,
+                           const CoarseLattice& lattice, bool along_normals, int pass, int passes, StreamingState& state,
                            const ProgressCallback& progress) {
     const auto started = std::chrono::steady_clock::now();
     CoarseSystem system;
     for (std::int64_t block = 0; block < layout.block_count(); ++block) {
         const VoxelBox owned = layout.box(block);
-        const BlockStages b = run_block_stages(source, plan, owned, owned);
+        const BlockStages b = run_block_stages(source, plan, owned, owned.grown(kCoarseRowsMargin).clipped(layout.dims));
         state.times.add(b);
         report_pass(progress, "coarse correction", pass, passes, block + 1, layout.block_count());
         if (!has_owned_faces(b.patch)) continue;
         const Eigen::VectorXd x = current_positions(b.patch, state.store);
-        system.add(coarse_share(b, lattice, x, owned_residual(b, x)));
+        const PointMatrix directions = along_normals ? key_face_normals(b) : PointMatrix();
+        system.add(coarse_share(b, lattice, x, owned_residual(b, x), directions));
     }
     const auto solve_started = std::chrono::steady_clock::now();
     const CoarseSolution solution = system.solve();
-    state.store.add_coarse_correction(lattice, solution);
+    state.store.add_coarse_correction(lattice, solution, state.pieces);
     state.run.solve_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - solve_started).count();
     return {{"nodes", std::int64_t(solution.nodes.size())},
             {"dropped_nodes", solution.dropped_nodes},
@@ -236,10 +272,10 @@ BoundTally bound_pass(const VolumeSource& source, const BlockPlan& plan, const B
     return tally;
 }
 
-/// The report's blocks.coarse: the lattice, the last coarse system's size, the time of every
+/// The report's blocks.coarse: the lattice and the space, the last coarse system's size, the time of every
 /// coarse pass, the energy before the first correction and after the last, each correction.
-nlohmann::json coarse_report(std::int64_t spacing, const nlohmann::json& corrections) {
-    nlohmann::json report = {{"spacing_voxels", spacing}, {"corrections", corrections}};
+nlohmann::json coarse_report(std::int64_t spacing, bool along_normals, const nlohmann::json& corrections) {
+    nlohmann::json report = {{"spacing_voxels", spacing}, {"space", along_normals ? "normals" : "xyz"}, {"corrections", corrections}};
     if (corrections.empty()) return report;
     double seconds = 0;
     for (const auto& c : corrections) seconds += c["seconds"].get<double>();
@@ -254,7 +290,7 @@ nlohmann::json coarse_report(std::int64_t spacing, const nlohmann::json& correct
 /// ", coarse correction every 8 voxels (2 × 5012 nodes, 1.3 s)" in the regularize stage's detail.
 std::string coarse_detail(std::int64_t spacing, const nlohmann::json& corrections) {
     if (corrections.empty()) return "";
-    const nlohmann::json report = coarse_report(spacing, corrections);
+    const nlohmann::json report = coarse_report(spacing, true, corrections);
     return ", coarse correction every " + std::to_string(spacing) + " voxels (" + std::to_string(corrections.size()) +
            " × " + std::to_string(report["nodes"].get<std::int64_t>()) + " nodes, " +
            format("%.1f", report["seconds"].get<double>()) + " s)";
@@ -287,7 +323,7 @@ PipelineResult run_streaming_pipeline(const VolumeSource& source, const Pipeline
     for (int sweep = 0; sweep <= bo.schwarz_sweeps; ++sweep) {
         solve_pass(source, plan, layout, halo, sweep, pass++, passes, solver, state, progress);
         if (state.blocks_with_surface == 0) throw empty_object_error(source, false);
-        if (coarse) corrections.push_back(coarse_pass(source, plan, layout, lattice, pass++, passes, state, progress));
+        if (coarse) corrections.push_back(coarse_pass(source, plan, layout, lattice, bo.coarse_along_normals, pass++, passes, state, progress));
     }
     const auto bound_started = std::chrono::steady_clock::now();
     const BoundTally tally = bound_pass(source, plan, layout, passes, solver, state, progress);
@@ -308,7 +344,7 @@ PipelineResult run_streaming_pipeline(const VolumeSource& source, const Pipeline
                   {"blocks_with_surface", state.blocks_with_surface},
                   {"schwarz_sweeps", bo.schwarz_sweeps},
                   {"passes", state.passes},
-                  {"coarse", coarse_report(bo.coarse_spacing, corrections)},
+                  {"coarse", coarse_report(bo.coarse_spacing, bo.coarse_along_normals, corrections)},
                   {"bound_seconds", bound_seconds},
                   {"largest_block_read_voxels", state.largest_read},
                   {"largest_block_patch_faces", state.largest_patch},
