@@ -96,13 +96,16 @@ double owned_energy_norm_bound(const BlockStages& block, const Eigen::VectorXd& 
 
 // Two-level correction (--coarse-spacing a). The error a block pass leaves is smooth (it varies
 // over ℓ edges), which one-level Schwarz removes slowly. The coarse space: a lattice of nodes
-// every a voxels over the grid's pointels; a vertex at pointel q moves by the trilinear
-// interpolation of the displacements of the 8 nodes around q (3 unknowns per node: P =
-// P_scalar ⊗ I3). Its weights depend on the vertex's global key alone, so every block computes
-// the same P. The correction x̃ ← x̃ + P e with C e = g, C = Pᵀ R P, g = Pᵀ (b − R x̃), is the
-// Galerkin (R-orthogonal) projection of the error x* − x̃ onto range(P): it minimizes the energy
-// ½ xᵀRx − bᵀx over x̃ + range(P), so the energy cannot go up (it falls by ½ gᵀe). C and g are
-// sums over the blocks of the owned rows of R (exact in a block without halo), as for the bound.
+// every a voxels over the grid's pointels; P_scalar interpolates trilinearly from the 8 nodes
+// around a vertex's pointel (weights from the vertex's global key alone, so every block computes
+// the same P). Vertex v moves along d_v, the field u on its key surfel (one unknown per node:
+// P's row block of v is d_v ⊗ row v of P_scalar; the default), or in every direction (P =
+// P_scalar ⊗ I3: --coarse-space xyz; it has the lower energy but slides vertices along the
+// surface, where the energy is cheap: docs/scaling.md). The correction x̃ ← x̃ + P e with C e = g,
+// C = Pᵀ R P, g = Pᵀ (b − R x̃), is the Galerkin (R-orthogonal) projection of the error x* − x̃
+// onto range(P): it minimizes the energy ½ xᵀRx − bᵀx over x̃ + range(P), so the energy cannot go
+// up (it falls by ½ gᵀe). C and g are sums over the blocks of the owned rows of R (exact in a
+// block without halo), as for the bound.
 
 /// The lattice of the coarse space over a grid of `dims` voxels.
 struct CoarseLattice {

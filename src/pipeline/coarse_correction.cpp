@@ -225,6 +225,8 @@ CoarseSolution CoarseSystem::solve() {
     if (n == 0) return solution;
     const auto to_matrix = [&](const std::vector<Entry>& entries, int per_node) {
         const auto local = [&](std::int64_t global) {
+            if (!contains(solution.nodes, global / per_node))
+                throw Error("coarse correction: an entry off the touched nodes (internal error)");
             return per_node * local_index(solution.nodes, global / per_node) + global % per_node;
         };
         std::vector<Eigen::Triplet<double>> triplets;

@@ -226,9 +226,9 @@ PointMatrix key_face_normals(const BlockStages& b) {
 /// vertices of the owned rows lie within two edges of an owned vertex, their key voxels within 4.
 constexpr std::int64_t kCoarseRowsMargin = 4;
 
-/// The two-level step, the `pass`-th pass: the coarse system summed over the blocks without
-/// halos (the owned rows of R are exact there, as in the bound pass), solved once, and x̃ += P e
-/// at every stored vertex. Returns what the report keeps of it.
+/// The two-level step, the `pass`-th pass: the coarse system summed over the blocks, each grown
+/// by kCoarseRowsMargin alone (its owned rows of R are exact, as in the bound pass), solved once,
+/// and x̃ += P e at every stored vertex. Returns what the report keeps of it.
 nlohmann::json coarse_pass(const VolumeSource& source, const BlockPlan& plan, const BlockLayout& layout,
                            const CoarseLattice& lattice, bool along_normals, int pass, int passes, StreamingState& state,
                            const ProgressCallback& progress) {
@@ -272,10 +272,11 @@ BoundTally bound_pass(const VolumeSource& source, const BlockPlan& plan, const B
     return tally;
 }
 
-/// The report's blocks.coarse: the lattice and the space, the last coarse system's size, the time of every
-/// coarse pass, the energy before the first correction and after the last, each correction.
+/// The report's blocks.coarse: the lattice and the space, the last coarse system's size, the time
+/// of the coarse passes, the energy before the first correction and after the last, each correction.
 nlohmann::json coarse_report(std::int64_t spacing, bool along_normals, const nlohmann::json& corrections) {
-    nlohmann::json report = {{"spacing_voxels", spacing}, {"space", along_normals ? "normals" : "xyz"}, {"corrections", corrections}};
+    nlohmann::json report = {
+        {"spacing_voxels", spacing}, {"space", along_normals ? "normals" : "xyz"}, {"corrections", corrections}};
     if (corrections.empty()) return report;
     double seconds = 0;
     for (const auto& c : corrections) seconds += c["seconds"].get<double>();
@@ -287,12 +288,14 @@ nlohmann::json coarse_report(std::int64_t spacing, bool along_normals, const nlo
     return report;
 }
 
-/// ", coarse correction every 8 voxels (2 × 5012 nodes, 1.3 s)" in the regularize stage's detail.
-std::string coarse_detail(std::int64_t spacing, const nlohmann::json& corrections) {
+/// ", coarse correction along the normals every 8 voxels (2 × 5012 nodes, 1.3 s)" in the
+/// regularize stage's detail, from coarse_report.
+std::string coarse_detail(const nlohmann::json& report) {
+    const auto& corrections = report["corrections"];
     if (corrections.empty()) return "";
-    const nlohmann::json report = coarse_report(spacing, true, corrections);
-    return ", coarse correction every " + std::to_string(spacing) + " voxels (" + std::to_string(corrections.size()) +
-           " × " + std::to_string(report["nodes"].get<std::int64_t>()) + " nodes, " +
+    return ", coarse correction " + std::string(report["space"] == "normals" ? "along the normals" : "xyz") + " every " +
+           std::to_string(report["spacing_voxels"].get<std::int64_t>()) + " voxels (" +
+           std::to_string(corrections.size()) + " × " + std::to_string(report["nodes"].get<std::int64_t>()) + " nodes, " +
            format("%.1f", report["seconds"].get<double>()) + " s)";
 }
 
@@ -323,7 +326,9 @@ PipelineResult run_streaming_pipeline(const VolumeSource& source, const Pipeline
     for (int sweep = 0; sweep <= bo.schwarz_sweeps; ++sweep) {
         solve_pass(source, plan, layout, halo, sweep, pass++, passes, solver, state, progress);
         if (state.blocks_with_surface == 0) throw empty_object_error(source, false);
-        if (coarse) corrections.push_back(coarse_pass(source, plan, layout, lattice, bo.coarse_along_normals, pass++, passes, state, progress));
+        if (coarse)
+            corrections.push_back(
+                coarse_pass(source, plan, layout, lattice, bo.coarse_along_normals, pass++, passes, state, progress));
     }
     const auto bound_started = std::chrono::steady_clock::now();
     const BoundTally tally = bound_pass(source, plan, layout, passes, solver, state, progress);
@@ -366,7 +371,7 @@ PipelineResult run_streaming_pipeline(const VolumeSource& source, const Pipeline
     finish_stage(progress, "normals", t.normals, run.field.description);
     finish_stage(progress, "regularize", t.regularize + run.solve_seconds,
                  run.solve.solver + ", halo " + std::to_string(halo) + " voxels, first pass + " +
-                     std::to_string(bo.schwarz_sweeps) + " Schwarz sweeps" + coarse_detail(bo.coarse_spacing, corrections) +
+                     std::to_string(bo.schwarz_sweeps) + " Schwarz sweeps" + coarse_detail(run.blocks["coarse"]) +
                      ", error bound " +
                      format("%.2e", run.solve.error_bound / voxel) + " voxel");
     finish_stage(progress, "weld", weld_seconds, surfels + ", " + std::to_string(run.welded.surface.component_count) + " components");
