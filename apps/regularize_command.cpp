@@ -138,6 +138,13 @@ void apply_block_flags(RegularizeCommand& c) {
     }
     if (!blocks.enabled() && blocks.halo) throw Error("--block-halo only applies with --block-size");
     if (!blocks.enabled() && blocks.schwarz_sweeps != 0) throw Error("--schwarz-sweeps only applies with --block-size");
+    if (c.flags.coarse_spacing) {
+        if (*c.flags.coarse_spacing < 0) throw Error("--coarse-spacing must be zero (off) or positive");
+        if (!blocks.enabled()) throw Error("--coarse-spacing only applies with --block-size");
+        blocks.coarse_spacing = *c.flags.coarse_spacing;
+    }
+    if (!blocks.enabled() && c.flags.coarse_space != "normals") throw Error("--coarse-space only applies with --block-size");
+    blocks.coarse_along_normals = c.flags.coarse_space == "normals";
 }
 
 }  // namespace
@@ -268,6 +275,15 @@ void add_block_flags(CLI::App& command, RegularizeCommand& c) {
     command.add_option("--schwarz-sweeps", c.options.blocks.schwarz_sweeps,
                        "Overlapping Schwarz sweeps after the first block-wise pass: each brings the mesh closer to the "
                        "whole-volume solve")
+        ->capture_default_str();
+    command.add_option("--coarse-spacing", c.flags.coarse_spacing,
+                       "Two-level correction of block-wise runs: after the first pass and after each Schwarz sweep, "
+                       "the Galerkin correction on a lattice of nodes this many voxels apart (trilinear; 0: off; "
+                       "default " + std::to_string(BlockOptions().coarse_spacing) + ")");
+    command.add_option("--coarse-space", c.flags.coarse_space,
+                       "The coarse correction's displacements: along the normals (one unknown per node) or in every "
+                       "direction (xyz: three; lower energy, but they slide vertices along the surface)")
+        ->check(CLI::IsMember({"normals", "xyz"}))
         ->capture_default_str();
     command.add_option("--fragments", c.outputs.fragments,
                        "Block-wise runs: also write one PLY mesh per block (vertex property 'key': global vertex id) "

@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,8 @@ struct CliFlags {
     std::uint64_t raw_header_bytes = 0;
     std::vector<double> spacing;
     std::vector<std::int64_t> block_size;  ///< --block-size N or X,Y,Z
+    std::optional<std::int64_t> coarse_spacing;  ///< --coarse-spacing (unset: BlockOptions' default)
+    std::string coarse_space = "normals";        ///< --coarse-space normals|xyz
     std::string solver = "auto";
     int connectivity = 26;
     std::string space = "lps";
@@ -43,7 +46,7 @@ struct RegularizeCommand {
 /// `dsreg regularize` and the Python module's keyword options (dsreg.regularize) both parse them.
 void add_pipeline_flags(CLI::App& command, RegularizeCommand& c);
 
-/// Registers the flags of block-wise runs (--block-size, --block-halo, --schwarz-sweeps,
+/// Registers the flags of block-wise runs (--block-size, --block-halo, --schwarz-sweeps, --coarse-spacing,
 /// --fragments; include/dsreg/block_pipeline.hpp, docs/scaling.md) on `command`, writing into
 /// `c`. Not keyword options of the Python module: block-wise runs stream a volume file, and its
 /// arrays are in memory already.

@@ -1,7 +1,9 @@
 #!/usr/bin/python3
 """Compares two binary PLY meshes written by dsreg with the same vertex order: prints
-`faces_equal max rms` — whether the face sections are byte for byte the same, then the largest and
-the root-mean-square vertex distance, in voxels of size H.
+`faces_equal max rms normal_max tangential_max` — whether the face sections are byte for byte the
+same, the largest and the root-mean-square vertex distance, then the largest component of the
+difference along the reference's vertex normal (the mean of its faces' u: how far the surface is)
+and across it (a slide along the surface), in voxels of size H.
 
     bench/ply_distance.py REFERENCE.ply OTHER.ply H
 """
@@ -40,8 +42,25 @@ def main():
     if a.shape != b.shape:
         print(f"different vertex counts {a.shape[0]} {b.shape[0]}")
         return
-    d = np.linalg.norm(a - b, axis=1) / h
-    print(f"{'yes' if faces_a == faces_b else 'no'} {d.max():.2e} {np.sqrt((d ** 2).mean()):.2e}")
+    e = (b - a) / h
+    d = np.linalg.norm(e, axis=1)
+    n = vertex_normals(faces_a, a.shape[0])
+    along = (e * n).sum(axis=1)
+    across = np.linalg.norm(e - along[:, None] * n, axis=1)
+    print(f"{'yes' if faces_a == faces_b else 'no'} {d.max():.2e} {np.sqrt((d ** 2).mean()):.2e} "
+          f"{np.abs(along).max():.2e} {across.max():.2e}")
+
+
+def vertex_normals(faces, vertices):
+    """The mean of the field u of each vertex's faces, normalized (dsreg's PLY faces: 4 indices and u)."""
+    record = np.dtype([("n", "u1"), ("v", "<i4", 4), ("u", "<f4", 3)])
+    table = np.frombuffer(faces, dtype=record)
+    if table.size == 0 or (table["n"] != 4).any():
+        sys.exit("ply_distance.py: expected dsreg's quad faces with the field u")
+    normals = np.zeros((vertices, 3))
+    for k in range(4):
+        np.add.at(normals, table["v"][:, k], table["u"].astype(np.float64))
+    return normals / np.linalg.norm(normals, axis=1)[:, None]
 
 
 if __name__ == "__main__":

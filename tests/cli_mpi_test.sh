@@ -63,6 +63,11 @@ check "streaming exits 0" test $? -eq 0
 check "streaming: same faces, same order" cmp -s <(faces "$work/whole.obj") <(faces "$work/streamed.obj")
 check "streaming reports its bound" grep -q '"error_bound_voxels"' "$work/streamed.json"
 check "streaming fragments" test -s "$work/streamed/manifest.json"
+"$DSREG_SERIAL" regularize --shape goursat --h 0.7 --radius 2.5 --block-size 12 --block-halo 6 --coarse-spacing 4 \
+    -o "$work/coarse.obj" --report "$work/coarse.json" -q
+check "coarse correction: same faces" cmp -s <(faces "$work/whole.obj") <(faces "$work/coarse.obj")
+coarse='import json,sys; c=json.load(open(sys.argv[1]))["blocks"]["coarse"]; sys.exit(0 if c["spacing_voxels"] == 4 and c["nodes"] > 0 and c["energy_after"] <= c["energy_before"] else 1)'
+check "coarse correction reported, energy down" python3 -c "$coarse" "$work/coarse.json"
 # The validity stage on the welded mesh (docs/validity.md): leopold's thin arms fold as solved.
 repaired='import json,sys; v=json.load(open(sys.argv[1]))["validity"]; sys.exit(0 if v["repair"] and not v["before"]["valid"] and v["rounds"] > 0 and v["after"]["valid"] else 1)'
 "$DSREG" --shape leopold --h 0.5 -o "$work/leo-mpi.obj" --report "$work/leo-mpi.json" -q
@@ -76,6 +81,8 @@ DSREG=$DSREG_SERIAL
 expect_error "fragments need blocks" "--fragments" regularize --shape sphere9 --h 1 --fragments "$work/out.d" -o "$work/out.obj"
 expect_error "halo needs blocks" "--block-halo" regularize --shape sphere9 --h 1 --block-halo 4 -o "$work/out.obj"
 expect_error "block size positive" "--block-size" regularize --shape sphere9 --h 1 --block-size 0 -o "$work/out.obj"
+expect_error "coarse spacing not negative" "--coarse-spacing must be zero (off) or positive" regularize --shape sphere9 --h 1 --block-size 8 --coarse-spacing -4 -o "$work/out.obj"
+expect_error "coarse spacing needs blocks" "--coarse-spacing only applies with --block-size" regularize --shape sphere9 --h 1 --coarse-spacing 8 -o "$work/out.obj"
 expect_error "block size 1 or 3 values" "--block-size" regularize --shape sphere9 --h 1 --block-size 4,4 -o "$work/out.obj"
 expect_error "streaming refuses AT" "--normals at" regularize --shape sphere9 --h 1 --block-size 8 --normals at -o "$work/out.obj"
 expect_error "streaming refuses label maps" "--multi-label" regularize --shape sphere9 --h 1 --block-size 8 --multi-label -o "$work/out.obj"

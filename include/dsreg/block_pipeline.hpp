@@ -22,6 +22,7 @@
 // so pessimistic for the largest one, docs/scaling.md); it costs one more pass without halos.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -92,6 +93,92 @@ SolveReport solve_patch_free(const BlockStages& block, Eigen::VectorXd& x, const
 /// the fairness of the owned vertices whose faces are all such faces. M = Σ_b M_b ≤ R (only
 /// positive semi-definite terms are left out), so Σ_b rᵀ M_b⁻¹ r ≥ rᵀ R⁻¹ r = ‖x̃ − x*‖²_R.
 double owned_energy_norm_bound(const BlockStages& block, const Eigen::VectorXd& residual, const SolverOptions& solver);
+
+// Two-level correction (--coarse-spacing a). The error a block pass leaves is smooth (it varies
+// over ℓ edges), which one-level Schwarz removes slowly. The coarse space: a lattice of nodes
+// every a voxels over the grid's pointels; P_scalar interpolates trilinearly from the 8 nodes
+// around a vertex's pointel (weights from the vertex's global key alone, so every block computes
+// the same P). Vertex v moves along d_v, the field u on its key surfel (one unknown per node:
+// P's row block of v is d_v ⊗ row v of P_scalar; the default), or in every direction (P =
+// P_scalar ⊗ I3: --coarse-space xyz; it has the lower energy but slides vertices along the
+// surface, where the energy is cheap: docs/scaling.md). The correction x̃ ← x̃ + P e with C e = g,
+// C = Pᵀ R P, g = Pᵀ (b − R x̃), is the Galerkin (R-orthogonal) projection of the error x* − x̃
+// onto range(P): it minimizes the energy ½ xᵀRx − bᵀx over x̃ + range(P), so the energy cannot go
+// up (it falls by ½ gᵀe). C and g are sums over the blocks of the owned rows of R (exact in a
+// block without halo), as for the bound.
+
+/// The lattice of the coarse space over a grid of `dims` voxels.
+struct CoarseLattice {
+    Index3 dims{0, 0, 0};
+    std::int64_t spacing = 0;  ///< voxels between nodes (> 0)
+
+    /// The nodes with a non-zero trilinear weight at the vertex named `vertex_key` (1 to 8 of
+    /// them; the weights sum to 1), named by their linear index on the lattice.
+    struct Stencil {
+        std::array<std::int64_t, 8> nodes{};
+        std::array<double, 8> weights{};
+        int count = 0;
+    };
+    Stencil stencil(std::int64_t vertex_key) const;
+};
+
+/// One block's share of the coarse system, on the nodes its patch's vertices touch.
+struct CoarseShare {
+    int unknowns_per_node = 3;             ///< 3 (P = P_scalar ⊗ I3) or 1 (along the vertices' directions)
+    std::vector<std::int64_t> nodes;       ///< lattice nodes, ascending (local index = position)
+    Eigen::SparseMatrix<double> galerkin;  ///< P_ownedᵀ R P, unknowns of a node interleaved
+    Eigen::SparseMatrix<double> gram;      ///< P_owned,scalarᵀ P_owned,scalar (one entry per node pair)
+    Eigen::VectorXd residual;              ///< P_ownedᵀ (b − R x̃)
+    double energy = 0;                     ///< Σ over the owned vertices of ½ x̃ᵀ(R x̃) − bᵀx̃
+};
+
+/// The share of `block` (whose owned rows of R are exact) at positions x (3 entries per patch
+/// vertex), given the residual rows r = R x − b of its owned vertices (zero elsewhere).
+/// `directions`: empty for the coarse space of displacements in every direction (P = P_scalar ⊗
+/// I3), or one unit row per patch vertex d_v for the space of displacements along them (P's row
+/// block of v: d_v times the row v of P_scalar; one unknown per node).
+CoarseShare coarse_share(const BlockStages& block, const CoarseLattice& lattice, const Eigen::VectorXd& x,
+                         const Eigen::VectorXd& owned_residual, const PointMatrix& directions = PointMatrix());
+
+/// The coarse correction e (3 entries per node) of the shares summed.
+struct CoarseSolution {
+    int unknowns_per_node = 3;
+    std::vector<std::int64_t> nodes;  ///< every node touched, ascending
+    Eigen::VectorXd correction;       ///< unknowns_per_node per node; 0 at the dropped nodes
+    std::int64_t dropped_nodes = 0;   ///< nodes whose columns of P depend on the others' (see solve)
+    double energy_before = 0;         ///< ½ x̃ᵀRx̃ − bᵀx̃
+    double energy_decrease = 0;       ///< ½ gᵀe ≥ 0
+
+    /// (P e) at the vertex named `vertex_key`, whose direction is `direction` (one unknown per node).
+    Eigen::Vector3d displacement(const CoarseLattice& lattice, std::int64_t vertex_key,
+                                 const Eigen::Vector3d& direction = Eigen::Vector3d::Zero()) const;
+};
+
+/// The coarse system summed over the blocks (global triplets, merged as they come: memory about
+/// nodes × 27 × (9 + 1) entries).
+class CoarseSystem {
+public:
+    void add(const CoarseShare& share);
+    /// Solves C e = g by CHOLMOD on the nodes whose columns of P are independent: a node whose
+    /// column of P_scalar lies (to rounding) in the span of the others' adds nothing to range(P)
+    /// and would make C singular; such nodes are found from the pivots of an LDLᵀ of PᵀP and
+    /// dropped. C = Pᵀ R P ⪰ λ_min(R) PᵀP ⊗ I3 is then positive definite.
+    /// The entries are merged in place.
+    CoarseSolution solve();
+
+private:
+    struct Entry {
+        std::int64_t row, column;
+        double value;
+    };
+    static void merge(std::vector<Entry>& entries);
+    static void add_matrix(std::vector<Entry>& entries, const Eigen::SparseMatrix<double>& m, const std::vector<std::int64_t>& nodes,
+                    int per_node);
+    std::vector<Entry> galerkin_, gram_, residual_;
+    std::size_t merged_size_ = 0;
+    int unknowns_per_node_ = 3;
+    double energy_ = 0;
+};
 
 /// The parts of a welded run that the blocks computed.
 struct WeldedRun {

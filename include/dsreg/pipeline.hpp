@@ -245,6 +245,12 @@ struct BlockOptions {
     Index3 block_size{0, 0, 0};        ///< --block-size (voxels); 0: the whole volume at once
     std::optional<std::int64_t> halo;  ///< --block-halo (voxels); unset: default_block_halo
     int schwarz_sweeps = 0;            ///< --schwarz-sweeps: overlapping Schwarz sweeps after the first pass
+    /// --coarse-spacing (voxels; 0: off): the two-level correction on a lattice of nodes this far
+    /// apart after the first pass and after each sweep (block_pipeline.hpp; 8: measured, docs/scaling.md)
+    std::int64_t coarse_spacing = 8;
+    /// --coarse-space: the coarse displacements move each vertex along the field u of its key
+    /// surfel (one unknown per node; the default) or in every direction (xyz: three per node)
+    bool coarse_along_normals = true;
 
     bool enabled() const { return block_size[0] > 0; }
 };

@@ -86,6 +86,8 @@ EXCLUDED_REGULARIZE_FLAGS = {
     "block-size": "block-wise streaming of a file larger than memory: dsreg regularize --block-size",
     "block-halo": "a flag of block-wise streaming (dsreg regularize --block-size)",
     "schwarz-sweeps": "a flag of block-wise streaming (dsreg regularize --block-size)",
+    "coarse-spacing": "a flag of block-wise streaming (dsreg regularize --block-size)",
+    "coarse-space": "a flag of block-wise streaming (dsreg regularize --block-size)",
     "fragments": "a flag of block-wise streaming (dsreg regularize --block-size)",
 }
 
