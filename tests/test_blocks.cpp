@@ -331,18 +331,31 @@ TEST(Blocks, DigitizingABoxEqualsCroppingTheWholeDigitization) {
     EXPECT_THROW(digitize_box(shape, 0.3, VoxelBox{{0, 0, 0}, {whole.grid.dims[0] + 1, 1, 1}}), Error);
 }
 
-TEST(Blocks, StreamingStaysWithinItsBoundAndWeldsAClosedSurface) {
+/// A goursat digitization's whole-volume CHOLMOD run with the options a block-wise run can have
+/// (plan_block_run's), and the options of block-wise runs to compare with it (the auto solver to
+/// 1e-7 voxel). No validity stage: the bound is the solve's (the repair's test is below).
+struct WholeAndBlocks {
     VolumeSource source;
-    source.shape = "goursat";
-    source.h = 0.7;
+    PipelineResult whole;
+    PipelineOptions blocks;
+};
+
+WholeAndBlocks goursat_whole_and_blocks(double h) {
+    WholeAndBlocks w;
+    w.source.shape = "goursat";
+    w.source.h = h;
     PipelineOptions options;
     options.solver = SolverKind::Cholmod;
-    options.validity = ValidityMode::Off;  // the bound is the solve's (the repair's test is below)
-    PipelineOptions blocks = options;
-    options = plan_block_run(source, options, "--block-size").options;  // what blocks can do, whole
-    const PipelineResult whole = run_pipeline(source, options);
-    blocks.solver = SolverKind::Auto;
-    blocks.max_error_voxels = 1e-7;
+    options.validity = ValidityMode::Off;
+    w.blocks = options;
+    w.whole = run_pipeline(w.source, plan_block_run(w.source, options, "--block-size").options);
+    w.blocks.solver = SolverKind::Auto;
+    w.blocks.max_error_voxels = 1e-7;
+    return w;
+}
+
+TEST(Blocks, StreamingStaysWithinItsBoundAndWeldsAClosedSurface) {
+    auto [source, whole, blocks] = goursat_whole_and_blocks(0.7);
     blocks.blocks.block_size = {10, 10, 10};
     blocks.blocks.halo = 5;
     double previous_error = 1e9, previous_bound = 1e9;
@@ -437,17 +450,7 @@ std::pair<double, double> largest_normal_and_tangential(const PointMatrix& a, co
 }
 
 TEST(Blocks, CoarseCorrectionLowersTheEnergyAndTheError) {
-    VolumeSource source;
-    source.shape = "goursat";
-    source.h = 0.5;
-    PipelineOptions options;
-    options.solver = SolverKind::Cholmod;
-    options.validity = ValidityMode::Off;
-    PipelineOptions blocks = options;
-    options = plan_block_run(source, options, "--block-size").options;
-    const PipelineResult whole = run_pipeline(source, options);
-    blocks.solver = SolverKind::Auto;
-    blocks.max_error_voxels = 1e-7;
+    auto [source, whole, blocks] = goursat_whole_and_blocks(0.5);
     blocks.blocks.block_size = {16, 16, 16};
     blocks.blocks.halo = 8;
     blocks.blocks.schwarz_sweeps = 1;
