@@ -13,6 +13,14 @@ namespace dsreg {
 
 namespace {
 
+/// The row of vertex `vertex_key`'s key surfel (the face its key names) in ascending `face_keys`,
+/// or −1 if that face is not there.
+std::int64_t key_face_row(const std::vector<std::int64_t>& face_keys, std::int64_t vertex_key) {
+    const std::int64_t key = vertex_key / 4;
+    const auto face = std::lower_bound(face_keys.begin(), face_keys.end(), key);
+    return face != face_keys.end() && *face == key ? std::int64_t(face - face_keys.begin()) : -1;
+}
+
 /// The latest positions of the vertices solved so far, by owning block.
 class VertexStore {
 public:
@@ -53,10 +61,8 @@ public:
             const BlockPiece& piece = pieces[block];
             for (std::size_t i = 0; i < keys_[block].size(); ++i) {
                 Eigen::Vector3d direction = Eigen::Vector3d::Zero();
-                if (solution.unknowns_per_node == 1) {
-                    const auto face = std::lower_bound(piece.face_keys.begin(), piece.face_keys.end(), keys_[block][i] / 4);
-                    direction = piece.face_normals.row(face - piece.face_keys.begin()).transpose();
-                }
+                if (solution.unknowns_per_node == 1)  // the key surfel of an owned vertex is an owned face
+                    direction = piece.face_normals.row(key_face_row(piece.face_keys, keys_[block][i])).transpose();
                 positions_[block].row(std::int64_t(i)) += solution.displacement(lattice, keys_[block][i], direction).transpose();
             }
         }
@@ -209,9 +215,8 @@ PointMatrix key_face_normals(const BlockStages& b) {
     const SurfacePatch& patch = b.patch;
     PointMatrix directions = PointMatrix::Zero(patch.vertex_count(), 3);
     for (std::int64_t i = 0; i < patch.vertex_count(); ++i) {
-        const std::int64_t key = patch.vertex_keys[std::size_t(i)] / 4;
-        const auto face = std::lower_bound(patch.face_keys.begin(), patch.face_keys.end(), key);
-        if (face != patch.face_keys.end() && *face == key) directions.row(i) = b.field.normals.row(face - patch.face_keys.begin());
+        const std::int64_t face = key_face_row(patch.face_keys, patch.vertex_keys[std::size_t(i)]);
+        if (face >= 0) directions.row(i) = b.field.normals.row(face);
     }
     for (std::int64_t j = 0; j < patch.vertex_count(); ++j) {
         if (!patch.vertex_owned[std::size_t(j)]) continue;
