@@ -35,9 +35,9 @@ bool same_exponents(const Monomial& a, const Monomial& b) {
     return a.ex == b.ex && a.ey == b.ey && a.ez == b.ez;
 }
 
-/// Sorts, combines like terms and drops zero coefficients.
+/// Sorts, combines like terms (in the order they were written) and drops zero coefficients.
 Terms canonicalize(Terms terms) {
-    std::sort(terms.begin(), terms.end(), canonical_less);
+    std::stable_sort(terms.begin(), terms.end(), canonical_less);
     Terms result;
     result.reserve(terms.size());
     for (const Monomial& m : terms) {
@@ -79,15 +79,28 @@ Terms scaled(Terms terms, double factor) {
 
 bool is_constant(const Terms& terms) { return terms.size() == 1 && total_degree(terms.front()) == 0; }
 
-/// Size of the dense (ex, ey, ez) array product_of() uses for a·b.
+/// Size of the dense (ex, ey, ez) array a·b would be accumulated in.
 double dense_product_size(const Terms& a, const Terms& b) {
     double size = 1.0;
     for (int axis = 0; axis < 3; ++axis) size *= max_exponent_of(a, axis) + max_exponent_of(b, axis) + 1;
     return size;
 }
 
-/// Product of two expanded polynomials, accumulated in a dense (ex, ey, ez) array. The caller
-/// guarantees degree(a) + degree(b) ≤ max_degree, so the array has at most 65³ entries.
+/// Pairs of terms against the cells of the dense array: few pairs (a monomial times anything,
+/// short factors of high degree) are summed by sorting them, many by the dense array.
+bool product_is_sparse(const Terms& a, const Terms& b) {
+    return double(a.size()) * double(b.size()) < dense_product_size(a, b);
+}
+
+/// Work of product_of(a, b): one multiply-add per pair, plus the dense array or the sort.
+double product_work(const Terms& a, const Terms& b) {
+    const double pairs = double(a.size()) * double(b.size());
+    return pairs + (product_is_sparse(a, b) ? pairs * std::log2(pairs + 2.0) : dense_product_size(a, b));
+}
+
+/// Product of two expanded polynomials. Each coefficient sums its pairs' products in the order
+/// (term of a, term of b) either way, so both ways give the same bits. The caller guarantees
+/// degree(a) + degree(b) ≤ max_degree, so the dense array has at most 65³ entries.
 Terms product_of(const Terms& a, const Terms& b) {
     if (a.empty() || b.empty()) return {};
     if (is_constant(a) || is_constant(b)) {  // scaling keeps the order; drop underflows to 0
@@ -95,6 +108,14 @@ Terms product_of(const Terms& a, const Terms& b) {
         result.erase(std::remove_if(result.begin(), result.end(), [](const Monomial& m) { return m.coefficient == 0.0; }),
                      result.end());
         return result;
+    }
+    if (product_is_sparse(a, b)) {
+        Terms pairs;
+        pairs.reserve(a.size() * b.size());
+        for (const Monomial& ma : a)
+            for (const Monomial& mb : b)
+                pairs.push_back(Monomial{ma.coefficient * mb.coefficient, ma.ex + mb.ex, ma.ey + mb.ey, ma.ez + mb.ez});
+        return canonicalize(std::move(pairs));
     }
     const int nx = max_exponent_of(a, 0) + max_exponent_of(b, 0) + 1;
     const int ny = max_exponent_of(a, 1) + max_exponent_of(b, 1) + 1;
@@ -291,8 +312,7 @@ private:
     /// a·b, counted against the work budget.
     Terms multiply(const Terms& a, const Terms& b, std::size_t operator_pos) {
         const bool by_constant = is_constant(a) || is_constant(b);
-        charge(by_constant ? double(a.size() + b.size()) : double(a.size()) * double(b.size()) + dense_product_size(a, b),
-               operator_pos);
+        charge(by_constant ? double(a.size() + b.size()) : product_work(a, b), operator_pos);
         return product_of(a, b);
     }
 
