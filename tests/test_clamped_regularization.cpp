@@ -105,6 +105,31 @@ TEST(BoxQp, MatchesExhaustiveActiveSetSearch) {
     }
 }
 
+TEST(BoxQp, OptimalityOfAnAppliedMatrixIsThatOfTheStoredOne) {
+    // The validity repair measures its region's KKT residual with R applied row by row, never
+    // assembled: both overloads must report the same, at points inside, outside and on the box.
+    for (unsigned seed = 0; seed < 10; ++seed) {
+        const SmallQp qp = random_qp(6, seed);
+        const Eigen::SparseMatrix<double> R = qp.R.sparseView();
+        const auto multiply = [&](const Eigen::VectorXd& y) -> Eigen::VectorXd { return qp.R * y; };
+        const Eigen::VectorXd solution = exhaustive_box_qp(qp);
+        for (const Eigen::VectorXd& x : {Eigen::VectorXd(solution), Eigen::VectorXd(qp.lower.array() - 1.0),
+                                         Eigen::VectorXd(0.5 * (qp.lower + qp.upper)), Eigen::VectorXd(qp.R.llt().solve(qp.b))}) {
+            SCOPED_TRACE("seed " + std::to_string(seed));
+            const BoxQpReport stored = box_qp_optimality(R, qp.b, qp.lower, qp.upper, x, 1e-9);
+            const BoxQpReport applied = box_qp_optimality(multiply, qp.b, qp.lower, qp.upper, x, 1e-9);
+            EXPECT_NEAR(applied.kkt_residual, stored.kkt_residual, 1e-12 * (1 + stored.kkt_residual));
+            EXPECT_NEAR(applied.stationarity, stored.stationarity, 1e-12 * (1 + stored.stationarity));
+            EXPECT_EQ(applied.constraint_violation, stored.constraint_violation);
+            EXPECT_EQ(applied.at_lower, stored.at_lower);
+            EXPECT_EQ(applied.at_upper, stored.at_upper);
+        }
+        // At the solution the KKT conditions hold; below the box they do not.
+        EXPECT_LE(box_qp_optimality(multiply, qp.b, qp.lower, qp.upper, solution, 1e-9).kkt_residual, 1e-9);
+        EXPECT_GT(box_qp_optimality(multiply, qp.b, qp.lower, qp.upper, qp.lower.array() - 1.0, 1e-9).constraint_violation, 0.0);
+    }
+}
+
 TEST(BoxQp, StartingFromTheUnconstrainedMinimizerItComputes) {
     for (unsigned seed = 50; seed < 60; ++seed) {
         const SmallQp qp = random_qp(6, seed);

@@ -35,6 +35,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <cstdint>
+#include <functional>
 
 #include "dsreg/progress.hpp"
 
@@ -93,6 +94,10 @@ struct BoxQpReport {
 /// Fills every field of the report except iteration counts and times.
 BoxQpReport box_qp_optimality(const Eigen::SparseMatrix<double>& R, const Eigen::VectorXd& b, const Eigen::VectorXd& lower,
                               const Eigen::VectorXd& upper, const Eigen::VectorXd& x, double tolerance);
+/// The same for an R that is applied, not stored: `multiply(y)` returns R y.
+BoxQpReport box_qp_optimality(const std::function<Eigen::VectorXd(const Eigen::VectorXd&)>& multiply, const Eigen::VectorXd& b,
+                              const Eigen::VectorXd& lower, const Eigen::VectorXd& upper, const Eigen::VectorXd& x,
+                              double tolerance);
 
 /// q(x + Δ) − q(x) = gᵀΔ + ½ ΔᵀRΔ with g = Rx − b: the exact energy change without the
 /// cancellation of subtracting two large values.

@@ -433,10 +433,16 @@ double box_qp_energy_change(const SparseMatrix& R, const Eigen::VectorXd& gradie
     return gradient.dot(step) + 0.5 * step.dot(R * step);
 }
 
+BoxQpReport box_qp_optimality(const std::function<Eigen::VectorXd(const Eigen::VectorXd&)>& multiply, const Eigen::VectorXd& b,
+                              const Eigen::VectorXd& lower, const Eigen::VectorXd& upper, const Eigen::VectorXd& x,
+                              double tolerance) {
+    const Eigen::VectorXd feasible = project(x, lower, upper);
+    return optimality_at(feasible, multiply(feasible) - b, (x - feasible).lpNorm<Eigen::Infinity>(), b, lower, upper, tolerance);
+}
+
 BoxQpReport box_qp_optimality(const SparseMatrix& R, const Eigen::VectorXd& b, const Eigen::VectorXd& lower,
                               const Eigen::VectorXd& upper, const Eigen::VectorXd& x, double tolerance) {
-    const Eigen::VectorXd feasible = project(x, lower, upper);
-    return optimality_at(feasible, R * feasible - b, (x - feasible).lpNorm<Eigen::Infinity>(), b, lower, upper, tolerance);
+    return box_qp_optimality([&](const Eigen::VectorXd& y) -> Eigen::VectorXd { return R * y; }, b, lower, upper, x, tolerance);
 }
 
 BoxQpReport solve_box_qp(const SparseMatrix& R, const Eigen::VectorXd& b, const Eigen::VectorXd& lower,

@@ -184,24 +184,30 @@ public:
     }
 
     /// Relative residual ‖A x − b‖ / ‖b‖ of E' on the free region (its stationarity; the KKT
-    /// residual of the box QP with the clamp boxes).
+    /// residual of the box QP with the clamp boxes). A x is summed row by row from the operator:
+    /// the region's matrix, as large as the region's whole system, is never assembled (on
+    /// lobster.vol it was the peak of the run).
     double region_residual() {
         std::vector<std::int32_t> region;
         for (std::size_t i = 0; i < in_region_.size(); ++i)
             if (free_in_region(std::int64_t(i))) region.push_back(std::int32_t(i));
         if (region.empty()) return 0;
         for (std::size_t k = 0; k < region.size(); ++k) local_[std::size_t(region[k])] = std::int32_t(k);
-        SparseMatrix matrix;
         Eigen::VectorXd b, x;
-        part_system(region, matrix, b);
+        visit_part_system(region, [](Eigen::Index, Eigen::Index, double) {}, b);
         gather(region, x);
+        const auto multiply = [&](const Eigen::VectorXd& y) {
+            Eigen::VectorXd product = Eigen::VectorXd::Zero(y.size()), unused;
+            visit_part_system(region, [&](Eigen::Index r, Eigen::Index c, double value) { product[r] += value * y[c]; }, unused);
+            return product;
+        };
         double residual = 0;
         if (o_.clamp_half_width) {
             Eigen::VectorXd lower, upper;
             clamp_bounds_of(region, lower, upper);
-            residual = box_qp_optimality(matrix, b, lower, upper, x, o_.qp.tolerance).kkt_residual;
+            residual = box_qp_optimality(multiply, b, lower, upper, x, o_.qp.tolerance).kkt_residual;
         } else {
-            residual = (matrix * x - b).norm() / std::max(b.norm(), 1e-300);
+            residual = (multiply(x) - b).norm() / std::max(b.norm(), 1e-300);
         }
         for (const std::int32_t v : region) local_[std::size_t(v)] = -1;
         return residual;
@@ -339,13 +345,13 @@ private:
 
     /// Adds block `M` at (row vertex r, column vertex c) of E' restricted to the part: into the
     /// part's matrix if c is in the part, else times x_c into the right-hand side.
-    void add_block(std::int32_t r, std::int32_t c, const Eigen::Matrix3d& M, std::vector<Eigen::Triplet<double>>& entries,
-                   Eigen::VectorXd& b) const {
+    template <class Entry>
+    void add_block(std::int32_t r, std::int32_t c, const Eigen::Matrix3d& M, Entry& entry, Eigen::VectorXd& b) const {
         const std::int32_t lr = local_[std::size_t(r)], lc = local_[std::size_t(c)];
         if (lr < 0) return;
         if (lc >= 0) {
             for (int i = 0; i < 3; ++i)
-                for (int j = 0; j < 3; ++j) entries.emplace_back(3 * Eigen::Index(lr) + i, 3 * Eigen::Index(lc) + j, M(i, j));
+                for (int j = 0; j < 3; ++j) entry(3 * Eigen::Index(lr) + i, 3 * Eigen::Index(lc) + j, M(i, j));
         } else {
             b.segment<3>(3 * Eigen::Index(lr)) -= M * x_.segment<3>(3 * Eigen::Index(c));
         }
@@ -353,11 +359,12 @@ private:
 
     /// The rows of E' for the part (local_ set): R_PP x_P = b_P − R_P,rest x_rest, plus the
     /// repair's terms. A block of R without an alignment part is c·I3 and gives its diagonal only,
-    /// as in the assembled matrix.
-    void part_system(const std::vector<std::int32_t>& part, SparseMatrix& matrix, Eigen::VectorXd& b) const {
+    /// as in the assembled matrix. Calls entry(row, column, value) for each entry of R_PP + the
+    /// repair's terms (entries at the same place add up) and fills b.
+    template <class Entry>
+    void visit_part_system(const std::vector<std::int32_t>& part, Entry entry, Eigen::VectorXd& b) const {
         const Eigen::Index n = 3 * Eigen::Index(part.size());
         detail::RegularizationOperator::Row& row = row_scratch_[std::size_t(omp_get_thread_num())];
-        std::vector<Eigen::Triplet<double>> entries;
         b.resize(n);
         for (std::size_t k = 0; k < part.size(); ++k) {
             const std::int32_t v = part[k];
@@ -374,13 +381,13 @@ private:
                 }
                 for (int i = 0; i < 3; ++i)
                     for (int j = 0; j < 3; ++j)
-                        if (row.full[q] || i == j) entries.emplace_back(r + i, 3 * Eigen::Index(column_local) + j, block(i, j));
+                        if (row.full[q] || i == j) entry(r + i, 3 * Eigen::Index(column_local) + j, block(i, j));
             }
             // Stronger data term (m − 1) α α_i w0_i |x_i − t_i|².
             const double extra = (factor_[std::size_t(v)] - 1) * weights_.alpha * element_or_one(weights_.vertex_alpha, v) *
                                  element_or_one(weights_.vertex_weights, v);
             if (extra > 0) {
-                for (int d = 0; d < 3; ++d) entries.emplace_back(r + d, r + d, extra);
+                for (int d = 0; d < 3; ++d) entry(r + d, r + d, extra);
                 b.segment<3>(r) += extra * targets_.row(v).transpose();
             }
         }
@@ -397,13 +404,19 @@ private:
             const Eigen::Matrix3d M = weight * (u * u.transpose() - u0 * u0.transpose());
             for (int e = 0; e < 4; ++e) {
                 const std::int32_t a = surface_.quads(f, e), c = surface_.quads(f, (e + 1) % 4);
-                add_block(a, a, M, entries, b);
-                add_block(c, c, M, entries, b);
-                add_block(a, c, -M, entries, b);
-                add_block(c, a, -M, entries, b);
+                add_block(a, a, M, entry, b);
+                add_block(c, c, M, entry, b);
+                add_block(a, c, -M, entry, b);
+                add_block(c, a, -M, entry, b);
             }
         }
-        matrix.resize(n, n);
+    }
+
+    /// The part's system assembled: R_PP + the repair's terms, and b.
+    void part_system(const std::vector<std::int32_t>& part, SparseMatrix& matrix, Eigen::VectorXd& b) const {
+        std::vector<Eigen::Triplet<double>> entries;
+        visit_part_system(part, [&](Eigen::Index r, Eigen::Index c, double value) { entries.emplace_back(r, c, value); }, b);
+        matrix.resize(b.size(), b.size());
         matrix.setFromTriplets(entries.begin(), entries.end());
     }
 
