@@ -61,14 +61,16 @@ public:
     std::int64_t unknowns() const override { return R_.unknowns(); }
     void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const override { R_.multiply(x, y); }
     double infinity_norm() const override { return summary_.infinity_norm; }
-    const std::vector<Eigen::Matrix3d>& diagonal_blocks() const override { return summary_.diagonal; }
+    /// Computed again from the operator if multigrid() released them.
+    const std::vector<Eigen::Matrix3d>& diagonal_blocks() const override;
     double data_weight_ratio() const override;
+    /// Releases the diagonal blocks once the hierarchy is built (it keeps its own, inverted).
     std::unique_ptr<Multigrid> multigrid(const AmgSettings& settings) const override;
     const Eigen::SparseMatrix<double>& matrix() const override;
 
 private:
     const RegularizationOperator& R_;
-    RegularizationOperator::Summary summary_;
+    mutable RegularizationOperator::Summary summary_;
     double smallest_data_weight_;
     mutable std::optional<Eigen::SparseMatrix<double>> assembled_;
 };
