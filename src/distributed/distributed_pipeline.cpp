@@ -169,7 +169,9 @@ PipelineResult run_distributed_pipeline(MPI_Comm comm, const VolumeSource& sourc
         layout = blocks_for_parts(plan.header.volume.grid.dims, size);
     });
     BlockStages block;
-    run_collectively(comm, [&] { block = run_block_stages(source, plan, layout.box(rank), layout.box(rank)); });
+    run_collectively(comm, [&] {  // R is not assembled on the patch: the solve writes its rows straight into PETSc
+        block = run_block_stages(source, plan, layout.box(rank), layout.box(rank), BlockAssembly::rhs_only);
+    });
     RankFigures figures;
     figures.owned_faces = count_set(block.patch.face_owned);
     figures.owned_vertices = count_set(block.patch.vertex_owned);
@@ -203,8 +205,8 @@ PipelineResult run_distributed_pipeline(MPI_Comm comm, const VolumeSource& sourc
     // What rank 0 needs of the block (positions filled after the solve), before the solve frees it.
     BlockPiece piece;
     run_collectively(comm, [&] { piece = patch_piece(block.patch, block.patch.surface.vertices, block.field.normals); });
-    NormalField field = std::move(block.field);
-    field.normals = PointMatrix();
+    NormalField field = std::move(block.field);  // its description, for the result
+    block.field.normals = std::move(field.normals);  // the vectors stay: the solve computes the rows of R from them
     distributed::PetscSolution solution = distributed::solve_with_petsc(comm, std::move(block), numbering, max_error, eigenvalue);
     piece.positions = std::move(solution.owned_positions);
     figures.petsc_assembly = solution.assembly_seconds;
