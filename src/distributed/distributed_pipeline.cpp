@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <limits>
+#include <utility>
 #include <cstring>
 
 #include "distributed_stages.hpp"
@@ -109,23 +110,31 @@ std::vector<T> matrix_values(const Eigen::Matrix<T, Eigen::Dynamic, 3, Eigen::Ro
     return std::vector<T>(m.data(), m.data() + m.size());
 }
 
-/// Every rank's piece, on rank 0 (empty elsewhere).
-std::vector<BlockPiece> gather_pieces(MPI_Comm comm, const BlockPiece& piece) {
-    const auto face_keys = distributed::gather_arrays(comm, piece.face_keys);
-    const auto corners = distributed::gather_arrays(comm, piece.face_corners);
-    const auto neighbors = distributed::gather_arrays(comm, piece.face_neighbors);
-    const auto normals = distributed::gather_arrays(comm, matrix_values(piece.face_normals));
-    const auto vertex_keys = distributed::gather_arrays(comm, piece.vertex_keys);
-    const auto positions = distributed::gather_arrays(comm, matrix_values(piece.positions));
+/// `values` (3 per row) as a matrix, freed as they are copied.
+PointMatrix point_matrix(std::vector<double>& values) {
+    PointMatrix m = Eigen::Map<const PointMatrix>(values.data(), std::int64_t(values.size() / 3), 3);
+    values = std::vector<double>();
+    return m;
+}
+
+/// Every rank's piece, on rank 0 (empty elsewhere); `piece` is consumed field by field, the
+/// gathered arrays moved into the pieces (rank 0 holds the whole surface once, not twice).
+std::vector<BlockPiece> gather_pieces(MPI_Comm comm, BlockPiece piece) {
+    auto face_keys = distributed::gather_arrays(comm, std::exchange(piece.face_keys, {}));
+    auto corners = distributed::gather_arrays(comm, std::exchange(piece.face_corners, {}));
+    auto neighbors = distributed::gather_arrays(comm, std::exchange(piece.face_neighbors, {}));
+    auto normals = distributed::gather_arrays(comm, matrix_values(std::exchange(piece.face_normals, PointMatrix())));
+    auto vertex_keys = distributed::gather_arrays(comm, std::exchange(piece.vertex_keys, {}));
+    auto positions = distributed::gather_arrays(comm, matrix_values(std::exchange(piece.positions, PointMatrix())));
     std::vector<BlockPiece> pieces(face_keys.size());
     for (std::size_t r = 0; r < pieces.size(); ++r) {
         BlockPiece& p = pieces[r];
-        p.face_keys = face_keys[r];
-        p.face_corners = corners[r];
-        p.face_neighbors = neighbors[r];
-        p.face_normals = Eigen::Map<const PointMatrix>(normals[r].data(), std::int64_t(normals[r].size() / 3), 3);
-        p.vertex_keys = vertex_keys[r];
-        p.positions = Eigen::Map<const PointMatrix>(positions[r].data(), std::int64_t(positions[r].size() / 3), 3);
+        p.face_keys = std::move(face_keys[r]);
+        p.face_corners = std::move(corners[r]);
+        p.face_neighbors = std::move(neighbors[r]);
+        p.face_normals = point_matrix(normals[r]);
+        p.vertex_keys = std::move(vertex_keys[r]);
+        p.positions = point_matrix(positions[r]);
     }
     return pieces;
 }
@@ -216,8 +225,7 @@ PipelineResult run_distributed_pipeline(MPI_Comm comm, const VolumeSource& sourc
                  solution.report.solver + ", " + std::to_string(solution.report.iterations) + " iterations, error bound " +
                      format("%.2e", solution.report.error_bound / plan.header.volume.grid.spacing.minCoeff()) + " voxel");
 
-    std::vector<BlockPiece> pieces = gather_pieces(comm, piece);
-    piece = BlockPiece();
+    std::vector<BlockPiece> pieces = gather_pieces(comm, std::move(piece));
 
     PipelineResult result;
     double weld_seconds = 0;
