@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <cstdio>
 #include <limits>
-#include <utility>
 #include <cstring>
+#include <utility>
 
 #include "distributed_stages.hpp"
 #include "dsreg/distributed.hpp"
