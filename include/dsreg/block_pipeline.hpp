@@ -64,9 +64,14 @@ struct BlockStages {
     double read_seconds = 0, surface_seconds = 0, normals_seconds = 0, assembly_seconds = 0;
 };
 
+/// Whether run_block_stages assembles R or leaves it to the caller (system.matrix empty; b and
+/// the constant filled either way): dsreg-mpi writes the rows straight into PETSc's matrix.
+enum class BlockAssembly { matrix_and_rhs, rhs_only };
+
 /// Reads the block (block_read_box), extracts its patch, estimates the field and assembles R. A
 /// block without faces gives an empty patch.
-BlockStages run_block_stages(const VolumeSource& source, const BlockPlan& plan, const VoxelBox& owned, const VoxelBox& rows);
+BlockStages run_block_stages(const VolumeSource& source, const BlockPlan& plan, const VoxelBox& owned, const VoxelBox& rows,
+                             BlockAssembly assembly = BlockAssembly::matrix_and_rhs);
 
 /// The voxels a block reads for the rows box `rows`: rows + the patch margin + the field's reach.
 VoxelBox block_read_box(const BlockPlan& plan, const VoxelBox& rows);

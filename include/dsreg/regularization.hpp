@@ -68,6 +68,10 @@ RegularizationSystem assemble_regularization_system(const PointMatrix& positions
                                                      const VertexLinks& links, const PointMatrix& normals,
                                                      const RegularizationWeights& weights);
 
+/// b and the constant of that system without R (its matrix left empty): for solvers that apply R
+/// without assembling it.
+RegularizationSystem regularization_right_hand_side(const PointMatrix& positions, const RegularizationWeights& weights);
+
 /// α · min_i α_i w0_i: the data term alone bounds the smallest eigenvalue of R from below (R is
 /// αW0_α ⊗ I3 plus positive semi-definite terms, eq. 25).
 double smallest_eigenvalue_bound(const RegularizationWeights& weights, std::int64_t vertex_count);

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <limits>
 #include <cstring>
+#include <utility>
 
 #include "distributed_stages.hpp"
 #include "dsreg/distributed.hpp"
@@ -109,23 +110,31 @@ std::vector<T> matrix_values(const Eigen::Matrix<T, Eigen::Dynamic, 3, Eigen::Ro
     return std::vector<T>(m.data(), m.data() + m.size());
 }
 
-/// Every rank's piece, on rank 0 (empty elsewhere).
-std::vector<BlockPiece> gather_pieces(MPI_Comm comm, const BlockPiece& piece) {
-    const auto face_keys = distributed::gather_arrays(comm, piece.face_keys);
-    const auto corners = distributed::gather_arrays(comm, piece.face_corners);
-    const auto neighbors = distributed::gather_arrays(comm, piece.face_neighbors);
-    const auto normals = distributed::gather_arrays(comm, matrix_values(piece.face_normals));
-    const auto vertex_keys = distributed::gather_arrays(comm, piece.vertex_keys);
-    const auto positions = distributed::gather_arrays(comm, matrix_values(piece.positions));
+/// `values` (3 per row) as a matrix, freed as they are copied.
+PointMatrix point_matrix(std::vector<double>& values) {
+    PointMatrix m = Eigen::Map<const PointMatrix>(values.data(), std::int64_t(values.size() / 3), 3);
+    values = std::vector<double>();
+    return m;
+}
+
+/// Every rank's piece, on rank 0 (empty elsewhere); `piece` is consumed field by field, the
+/// gathered arrays moved into the pieces (rank 0 holds the whole surface once, not twice).
+std::vector<BlockPiece> gather_pieces(MPI_Comm comm, BlockPiece piece) {
+    auto face_keys = distributed::gather_arrays(comm, std::exchange(piece.face_keys, {}));
+    auto corners = distributed::gather_arrays(comm, std::exchange(piece.face_corners, {}));
+    auto neighbors = distributed::gather_arrays(comm, std::exchange(piece.face_neighbors, {}));
+    auto normals = distributed::gather_arrays(comm, matrix_values(std::exchange(piece.face_normals, PointMatrix())));
+    auto vertex_keys = distributed::gather_arrays(comm, std::exchange(piece.vertex_keys, {}));
+    auto positions = distributed::gather_arrays(comm, matrix_values(std::exchange(piece.positions, PointMatrix())));
     std::vector<BlockPiece> pieces(face_keys.size());
     for (std::size_t r = 0; r < pieces.size(); ++r) {
         BlockPiece& p = pieces[r];
-        p.face_keys = face_keys[r];
-        p.face_corners = corners[r];
-        p.face_neighbors = neighbors[r];
-        p.face_normals = Eigen::Map<const PointMatrix>(normals[r].data(), std::int64_t(normals[r].size() / 3), 3);
-        p.vertex_keys = vertex_keys[r];
-        p.positions = Eigen::Map<const PointMatrix>(positions[r].data(), std::int64_t(positions[r].size() / 3), 3);
+        p.face_keys = std::move(face_keys[r]);
+        p.face_corners = std::move(corners[r]);
+        p.face_neighbors = std::move(neighbors[r]);
+        p.face_normals = point_matrix(normals[r]);
+        p.vertex_keys = std::move(vertex_keys[r]);
+        p.positions = point_matrix(positions[r]);
     }
     return pieces;
 }
@@ -169,7 +178,9 @@ PipelineResult run_distributed_pipeline(MPI_Comm comm, const VolumeSource& sourc
         layout = blocks_for_parts(plan.header.volume.grid.dims, size);
     });
     BlockStages block;
-    run_collectively(comm, [&] { block = run_block_stages(source, plan, layout.box(rank), layout.box(rank)); });
+    run_collectively(comm, [&] {  // R is not assembled on the patch: the solve writes its rows straight into PETSc
+        block = run_block_stages(source, plan, layout.box(rank), layout.box(rank), BlockAssembly::rhs_only);
+    });
     RankFigures figures;
     figures.owned_faces = count_set(block.patch.face_owned);
     figures.owned_vertices = count_set(block.patch.vertex_owned);
@@ -203,8 +214,8 @@ PipelineResult run_distributed_pipeline(MPI_Comm comm, const VolumeSource& sourc
     // What rank 0 needs of the block (positions filled after the solve), before the solve frees it.
     BlockPiece piece;
     run_collectively(comm, [&] { piece = patch_piece(block.patch, block.patch.surface.vertices, block.field.normals); });
-    NormalField field = std::move(block.field);
-    field.normals = PointMatrix();
+    NormalField field = std::move(block.field);  // its description, for the result
+    block.field.normals = std::move(field.normals);  // the vectors stay: the solve computes the rows of R from them
     distributed::PetscSolution solution = distributed::solve_with_petsc(comm, std::move(block), numbering, max_error, eigenvalue);
     piece.positions = std::move(solution.owned_positions);
     figures.petsc_assembly = solution.assembly_seconds;
@@ -214,8 +225,7 @@ PipelineResult run_distributed_pipeline(MPI_Comm comm, const VolumeSource& sourc
                  solution.report.solver + ", " + std::to_string(solution.report.iterations) + " iterations, error bound " +
                      format("%.2e", solution.report.error_bound / plan.header.volume.grid.spacing.minCoeff()) + " voxel");
 
-    std::vector<BlockPiece> pieces = gather_pieces(comm, piece);
-    piece = BlockPiece();
+    std::vector<BlockPiece> pieces = gather_pieces(comm, std::move(piece));
 
     PipelineResult result;
     double weld_seconds = 0;

@@ -36,8 +36,10 @@ struct PetscSolution {
 };
 
 /// Assembles the owned rows of R into a PETSc matrix and solves R x = b with CG + algebraic
-/// multigrid until ‖R x − b‖₂ / smallest_eigenvalue ≤ max_error (or rounding level). Consumes
-/// the block (freed once PETSc holds its rows, before the multigrid setup). Collective.
+/// multigrid until ‖R x − b‖₂ / smallest_eigenvalue ≤ max_error (or rounding level). The rows
+/// are computed from the block's patch, field and weights (its system.matrix is not read: run
+/// the block stages with BlockAssembly::rhs_only). Consumes the block (freed once PETSc holds
+/// its rows, before the multigrid setup). Collective.
 PetscSolution solve_with_petsc(MPI_Comm comm, BlockStages block, const VertexNumbering& numbering, double max_error,
                                double smallest_eigenvalue);
 

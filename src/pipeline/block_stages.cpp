@@ -153,7 +153,8 @@ VoxelBox block_read_box(const BlockPlan& plan, const VoxelBox& rows) {
     return rows.grown(plan.read_margin).clipped(plan.header.volume.grid.dims);
 }
 
-BlockStages run_block_stages(const VolumeSource& source, const BlockPlan& plan, const VoxelBox& owned, const VoxelBox& rows) {
+BlockStages run_block_stages(const VolumeSource& source, const BlockPlan& plan, const VoxelBox& owned, const VoxelBox& rows,
+                             BlockAssembly assembly) {
     const PipelineOptions& o = plan.options;
     BlockStages b;
     b.owned = owned;
@@ -177,8 +178,10 @@ BlockStages run_block_stages(const VolumeSource& source, const BlockPlan& plan, 
         b.weights = RegularizationWeights{o.alpha, o.beta, o.gamma, {}, {}};
         apply_regularization_extensions(o.extensions, b.patch.surface, b.field.normals, Eigen::VectorXd(), b.weights);
         const DigitalSurface& s = b.patch.surface;
-        b.system = assemble_regularization_system(s.vertices, s.quads, vertex_links(s.quads, s.vertex_count()),
-                                                  b.field.normals, b.weights);
+        b.system = assembly == BlockAssembly::matrix_and_rhs
+                       ? assemble_regularization_system(s.vertices, s.quads, vertex_links(s.quads, s.vertex_count()),
+                                                        b.field.normals, b.weights)
+                       : regularization_right_hand_side(s.vertices, b.weights);
         clock.finish();
     }
     b.read_seconds = stage_time(clock, "read");

@@ -55,8 +55,14 @@ RegularizationSystem assemble_regularization_system(const PointMatrix& positions
     validate_weights(weights, n, quads.rows());
     if (normals.rows() != quads.rows()) throw Error("normal field has " + std::to_string(normals.rows()) +
                                                     " vectors for " + std::to_string(quads.rows()) + " faces");
-    RegularizationSystem system;
+    RegularizationSystem system = regularization_right_hand_side(positions, weights);
     detail::assemble_matrix(detail::RegularizationOperator(quads, links, normals, weights, n), system.matrix);
+    return system;
+}
+
+RegularizationSystem regularization_right_hand_side(const PointMatrix& positions, const RegularizationWeights& weights) {
+    const std::int64_t n = positions.rows();
+    RegularizationSystem system;
     system.rhs.resize(3 * n);
     double constant = 0;
 #pragma omp parallel for schedule(static) reduction(+ : constant) if (n >= 4096)
