@@ -40,6 +40,8 @@ std::string sample_type_name(const SampleFormat& sample) {
 }
 
 Index3 image_dims(const std::string& path, const ImageHeader& header) {
+    if (header.pixel_type == "unknown" || header.value_type == "unknown")
+        fail(path, "the header gives no voxel type that ITK recognizes (its type field is missing or garbled)");
     if (header.pixel_type != "scalar" || header.components != 1) {
         const std::string kind = header.pixel_type == "scalar" ? "multi-component" : header.pixel_type;
         fail(path, kind + " image with " + std::to_string(header.components) +

@@ -117,11 +117,23 @@ std::string sample_name(const SampleFormat& sample) {
     return kind + std::to_string(8 * sample.bytes);
 }
 
+/// What `query` returns, or `fallback` where ITK throws: it does for the unknown types that a
+/// malformed header leaves (a MetaImage whose ElementType line is garbled, found by fuzzing), and
+/// the header's own checks, not ITK, then say what is wrong with it.
+template <class T, class Query>
+T itk_or(T fallback, Query query) {
+    try {
+        return query();
+    } catch (const itk::ExceptionObject&) {
+        return fallback;
+    }
+}
+
 /// The value type of an ImageIO as dsreg's SampleFormat (host byte order: ITK swaps bytes).
 void describe_component(const itk::ImageIOBase& io, ImageHeader& header) {
     using Component = itk::IOComponentEnum;
     const Component type = io.GetComponentType();
-    const int bytes = static_cast<int>(io.GetComponentSize());
+    const int bytes = itk_or(0, [&] { return static_cast<int>(io.GetComponentSize()); });
     header.sample.bytes = bytes;
     header.sample.big_endian = host_big_endian();
     header.value_type_supported = bytes == 1 || bytes == 2 || bytes == 4 || bytes == 8;
@@ -140,7 +152,9 @@ void describe_component(const itk::ImageIOBase& io, ImageHeader& header) {
     case Component::DOUBLE: header.sample.kind = SampleKind::Float; break;
     default: header.value_type_supported = false; break;
     }
-    header.value_type = header.value_type_supported ? sample_name(header.sample) : itk::ImageIOBase::GetComponentTypeAsString(type);
+    header.value_type = header.value_type_supported
+                            ? sample_name(header.sample)
+                            : itk_or(std::string("unknown"), [&] { return itk::ImageIOBase::GetComponentTypeAsString(type); });
 }
 
 ImageHeader header_of(const itk::ImageIOBase& io, const std::string& format) {
@@ -153,7 +167,7 @@ ImageHeader header_of(const itk::ImageIOBase& io, const std::string& format) {
         header.direction.push_back(io.GetDirection(d));
     }
     header.components = io.GetNumberOfComponents();
-    header.pixel_type = lower_case(itk::ImageIOBase::GetPixelTypeAsString(io.GetPixelType()));
+    header.pixel_type = lower_case(itk_or(std::string("unknown"), [&] { return itk::ImageIOBase::GetPixelTypeAsString(io.GetPixelType()); }));
     describe_component(io, header);
     return header;
 }
