@@ -294,6 +294,9 @@ private:
     }
 
     void add_face(const double* indices, std::size_t size) {
+        // Checked first: once normals are read, the faces carry them and a face without one
+        // cannot be added (a second POLYGONS after CELL_DATA, found by fuzzing).
+        if (face_normal_count_ > 0) fail("CELL_DATA before POLYGONS is not supported");
         if (size != 3 && size != 4) fail(unsupported_face_size(static_cast<std::int64_t>(size)));
         std::int32_t face[4];
         const auto vertex_count = static_cast<std::int64_t>(coordinates_.size() / 3);
@@ -304,7 +307,6 @@ private:
             face[k] = static_cast<std::int32_t>(index);
         }
         faces_.add(face, static_cast<int>(size));
-        if (face_normal_count_ > 0) fail("CELL_DATA before POLYGONS is not supported");
     }
 
     void skip_cells(const std::vector<std::string_view>& words) {
