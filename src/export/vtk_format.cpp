@@ -17,6 +17,7 @@
 
 #include "dsreg/atomic_file.hpp"
 #include "dsreg/error.hpp"
+#include "dsreg/text.hpp"
 #include "mesh_format.hpp"
 
 namespace dsreg::mesh_format {
@@ -240,7 +241,12 @@ private:
         if (equals_keyword(keyword, "vertices") || equals_keyword(keyword, "lines")) return skip_cells(words);
         if (equals_keyword(keyword, "triangle_strips")) fail("triangle strips are not supported (triangulate the mesh first)");
         if (equals_keyword(keyword, "cell_data")) return attribute_block(count_word(words, 1, "a cell count"), true);
-        if (equals_keyword(keyword, "point_data")) return attribute_block(count_word(words, 1, "a point count"), false);
+        if (equals_keyword(keyword, "point_data")) {
+            const std::uint64_t count = count_word(words, 1, "a point count");
+            if (!has_points_) fail("POINT_DATA before POINTS is not supported");
+            if (count != coordinates_.size() / 3) fail("POINT_DATA count differs from the number of points");
+            return attribute_block(count, false);
+        }
         if (equals_keyword(keyword, "metadata")) return skip_metadata();
         if (equals_keyword(keyword, "field")) return skip_field(words);
         fail("unexpected section '" + std::string(keyword.substr(0, 40)) + "'");
@@ -302,8 +308,11 @@ private:
         const auto vertex_count = static_cast<std::int64_t>(coordinates_.size() / 3);
         for (std::size_t k = 0; k < size; ++k) {
             const double index = indices[k];
-            if (!(index >= 0 && index < double(vertex_count)) || index != std::floor(index))
+            if (!(index >= 0 && index < double(vertex_count)) || index != std::floor(index)) {
+                // Doubles beyond the 64-bit integers (or NaN) cannot be converted: named as read.
+                if (!(std::abs(index) < 9e18)) fail("face refers to vertex " + format("%g", index) + ", not a vertex index");
                 fail(face_index_out_of_range(static_cast<std::int64_t>(index), vertex_count));
+            }
             face[k] = static_cast<std::int32_t>(index);
         }
         faces_.add(face, static_cast<int>(size));
