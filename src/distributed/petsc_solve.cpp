@@ -198,10 +198,7 @@ PetscSolution solve_with_petsc(MPI_Comm comm, BlockStages block, const VertexNum
             DSREG_PETSC(VecRestoreArray(translations[d], &t));
         }
     }
-    // PETSc holds the rows now: free the block before the multigrid setup (assigning an empty
-    // SparseMatrix would keep R's arrays: Eigen 3.4 shrinks the size, not the capacity).
-    Eigen::SparseMatrix<double>().swap(block.system.matrix);
-    block = BlockStages();
+    block = BlockStages();  // PETSc holds the rows now: free the block before the multigrid setup
     MatNullSpace near_null = nullptr;
     DSREG_PETSC(MatNullSpaceCreate(comm, PETSC_FALSE, 3, translations, &near_null));
     DSREG_PETSC(MatSetNearNullSpace(A, near_null));
