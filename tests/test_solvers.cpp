@@ -2,6 +2,7 @@
 // balls, their digital surface, integral invariant normals. Every solver must agree with CHOLMOD
 // within 1e-4 voxel, with the paper's weights and with the tiny α of its Fig. 7.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <cmath>
 #include <filesystem>
@@ -274,6 +275,101 @@ TEST(Solvers, IndefiniteMatricesAreRejected) {
         Eigen::VectorXd x = Eigen::VectorXd::Zero(6);
         EXPECT_THROW(solve_spd(R, b, x, options), Error) << name;
     }
+}
+
+/// A random symmetric block matrix on n nodes: node i coupled to i ± 1, ± 37 and ± 1001 (when in
+/// range) by random 3×3 blocks, A_ji = A_ijᵀ, and a dominant symmetric diagonal block.
+template <class Scalar>
+detail::BlockMatrixT<Scalar> random_symmetric_blocks(std::int64_t n, std::mt19937& rng) {
+    std::normal_distribution<double> normal;
+    const auto random_block = [&] { return Eigen::Matrix3d(Eigen::Matrix3d::NullaryExpr([&] { return normal(rng); })); };
+    std::vector<std::vector<std::pair<std::int32_t, Eigen::Matrix3d>>> rows(static_cast<std::size_t>(n));
+    for (std::int64_t i = 0; i < n; ++i) {
+        const Eigen::Matrix3d d = random_block();
+        rows[std::size_t(i)].emplace_back(std::int32_t(i), d + d.transpose() + 40 * Eigen::Matrix3d::Identity());
+        for (const std::int64_t offset : {1, 37, 1001}) {
+            if (i + offset >= n) continue;
+            const Eigen::Matrix3d b = random_block();
+            rows[std::size_t(i)].emplace_back(std::int32_t(i + offset), b);
+            rows[std::size_t(i + offset)].emplace_back(std::int32_t(i), b.transpose());
+        }
+    }
+    detail::BlockMatrixT<Scalar> a;
+    a.rows = a.cols = n;
+    for (const auto& row : rows) {
+        for (const auto& [j, b] : row) {
+            a.column.push_back(j);
+            a.block.push_back(b.template cast<Scalar>());
+        }
+        a.start.push_back(std::int64_t(a.column.size()));
+    }
+    return a;
+}
+
+/// Relative distance ‖a − b‖ / ‖b‖.
+double relative_distance(const Eigen::VectorXd& a, const Eigen::VectorXd& b) { return (a - b).norm() / b.norm(); }
+
+TEST(BlockSparse, UpperTriangleProductIsTheFullProduct) {
+    // The coarse levels keep the upper triangle only: their product (and y −= A x) must be the
+    // full matrix's, with one thread or several (the rows beyond a thread's range are summed from
+    // its accumulator), in both precisions of the hierarchy.
+    std::mt19937 rng(11);
+    std::normal_distribution<double> normal;
+    const std::int64_t n = 3 * detail::kParallelMinRows;  // large enough for the parallel path
+    const int threads = omp_get_max_threads();
+    for (int precision = 0; precision < 2; ++precision) {
+        const auto check = [&](const auto& full) {
+            auto upper = full;
+            detail::keep_upper_triangle(upper);
+            EXPECT_EQ(upper.block_count(), (full.block_count() + n) / 2);
+            const Eigen::VectorXd x = Eigen::VectorXd::NullaryExpr(3 * n, [&] { return normal(rng); });
+            const Eigen::VectorXd w = Eigen::VectorXd::NullaryExpr(3 * n, [&] { return normal(rng); });
+            Eigen::VectorXd product;
+            full.multiply(x, product);
+            for (const int t : {1, 2, 3}) {
+                omp_set_num_threads(t);
+                std::vector<Eigen::VectorXd> scratch;
+                Eigen::VectorXd y(3 * n), z = w, v = w;
+                y.setConstant(std::nan(""));  // every entry must be written
+                detail::multiply_symmetric_upper(upper, x, y, scratch, false);
+                detail::multiply_symmetric_upper(upper, x, z, scratch, true);
+                full.multiply_subtract(x, v);
+                EXPECT_LT(relative_distance(y, product), 1e-14) << t << " threads";
+                EXPECT_LT(relative_distance(z, w - product), 1e-14) << t << " threads";
+                EXPECT_LT(relative_distance(v, w - product), 1e-15) << t << " threads";
+            }
+            omp_set_num_threads(threads);
+        };
+        if (precision == 0) check(random_symmetric_blocks<double>(n, rng));
+        else check(random_symmetric_blocks<float>(n, rng));
+    }
+}
+
+TEST(BlockSparse, GalerkinProductIsPtAP) {
+    // Pᵀ A P row by row (sized by a pattern pass, then filled in place) against the product of
+    // the scalar matrices.
+    std::mt19937 rng(5);
+    std::normal_distribution<double> normal;
+    std::uniform_int_distribution<std::int32_t> column_of(0, 1999);
+    const std::int64_t n = 2 * detail::kParallelMinRows, m = 2000;
+    const detail::BlockMatrix a = random_symmetric_blocks<double>(n, rng);
+    detail::BlockMatrix p;
+    p.rows = n;
+    p.cols = m;
+    for (std::int64_t i = 0; i < n; ++i) {
+        std::vector<std::int32_t> columns = {std::int32_t(i * m / n), column_of(rng), column_of(rng)};
+        std::sort(columns.begin(), columns.end());
+        columns.erase(std::unique(columns.begin(), columns.end()), columns.end());
+        for (const std::int32_t c : columns) {
+            p.column.push_back(c);
+            p.block.push_back(Eigen::Matrix3d::NullaryExpr([&] { return normal(rng); }));
+        }
+        p.start.push_back(std::int64_t(p.column.size()));
+    }
+    const Eigen::SparseMatrix<double> expected = Eigen::SparseMatrix<double>(p.to_scalar().transpose()) * a.to_scalar() * p.to_scalar();
+    const Eigen::SparseMatrix<double> product = detail::galerkin_product(a, p, detail::transposed_pattern(p)).to_scalar();
+    EXPECT_LT((product - expected).norm(), 1e-13 * expected.norm());
+    EXPECT_EQ(product.nonZeros(), expected.nonZeros());
 }
 
 }  // namespace

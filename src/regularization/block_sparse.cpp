@@ -41,16 +41,32 @@ ScalarRows row_view(const Eigen::SparseMatrix<double>& s) {
     return ScalarRows(s.rows(), s.cols(), s.nonZeros(), s.outerIndexPtr(), s.innerIndexPtr(), s.valuePtr());
 }
 
+namespace {
+
+/// y_i = A_i x, or y_i −= A_i x when `subtract`, for every block row i (in parallel).
+template <bool subtract, class Scalar>
+void multiply_rows(const BlockMatrixT<Scalar>& a, const Eigen::VectorXd& x, Eigen::VectorXd& y) {
+#pragma omp parallel for schedule(static) if (a.rows >= kParallelMinRows)
+    for (std::int64_t i = 0; i < a.rows; ++i) {
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        for (std::int64_t q = a.start[std::size_t(i)]; q < a.start[std::size_t(i + 1)]; ++q)
+            sum.noalias() += a.block[std::size_t(q)].template cast<double>() * x.segment<3>(3 * std::int64_t(a.column[std::size_t(q)]));
+        if constexpr (subtract) y.segment<3>(3 * i) -= sum;
+        else y.segment<3>(3 * i) = sum;
+    }
+}
+
+}  // namespace
+
 template <class Scalar>
 void BlockMatrixT<Scalar>::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
     y.resize(3 * rows);
-#pragma omp parallel for schedule(static) if (rows >= kParallelMinRows)
-    for (std::int64_t i = 0; i < rows; ++i) {
-        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-        for (std::int64_t q = start[std::size_t(i)]; q < start[std::size_t(i + 1)]; ++q)
-            sum.noalias() += block[std::size_t(q)].template cast<double>() * x.segment<3>(3 * std::int64_t(column[std::size_t(q)]));
-        y.segment<3>(3 * i) = sum;
-    }
+    multiply_rows<false>(*this, x, y);
+}
+
+template <class Scalar>
+void BlockMatrixT<Scalar>::multiply_subtract(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+    multiply_rows<true>(*this, x, y);
 }
 
 template <class Scalar>
@@ -112,9 +128,71 @@ void BlockMatrixT<Scalar>::multiply_transposed(const Eigen::VectorXd& x, Eigen::
 }
 
 template <class Scalar>
+void keep_upper_triangle(BlockMatrixT<Scalar>& a) {
+    std::int64_t kept = 0;
+    for (std::int64_t i = 0; i < a.rows; ++i) {
+        const std::int64_t first = a.start[std::size_t(i)], last = a.start[std::size_t(i + 1)];
+        a.start[std::size_t(i)] = kept;
+        for (std::int64_t q = first; q < last; ++q)
+            if (a.column[std::size_t(q)] >= i) {
+                a.column[std::size_t(kept)] = a.column[std::size_t(q)];
+                a.block[std::size_t(kept)] = a.block[std::size_t(q)];
+                ++kept;
+            }
+    }
+    a.start[std::size_t(a.rows)] = kept;
+    a.column.resize(std::size_t(kept));
+    a.column.shrink_to_fit();
+    a.block.resize(std::size_t(kept));
+    a.block.shrink_to_fit();
+}
+
+template <class Scalar>
+void multiply_symmetric_upper(const BlockMatrixT<Scalar>& a, const Eigen::VectorXd& x, Eigen::VectorXd& y,
+                              std::vector<Eigen::VectorXd>& scratch, bool subtract) {
+    const int threads = a.rows >= kParallelMinRows ? omp_get_max_threads() : 1;
+    const double sign = subtract ? -1.0 : 1.0;
+    if (!subtract) y.setZero(3 * a.rows);
+    if (threads > 1) scratch.resize(std::size_t(threads - 1));
+#pragma omp parallel num_threads(threads)
+    {
+        const int t = omp_get_thread_num(), nt = omp_get_num_threads();
+        const bool last_range = t == nt - 1;  // scatters only into its own rows (j ≥ i)
+        Eigen::VectorXd& spill = last_range ? y : scratch[std::size_t(t)];
+        if (!last_range) spill.setZero(3 * a.rows);
+        const std::int64_t first = a.rows * t / nt, last = a.rows * (t + 1) / nt;
+        for (std::int64_t i = first; i < last; ++i) {
+            const Eigen::Vector3d xi = sign * x.segment<3>(3 * i);
+            Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+            for (std::int64_t q = a.start[std::size_t(i)]; q < a.start[std::size_t(i + 1)]; ++q) {
+                const std::int64_t j = a.column[std::size_t(q)];
+                const Eigen::Matrix3d b = a.block[std::size_t(q)].template cast<double>();
+                sum.noalias() += b * x.segment<3>(3 * j);
+                if (j != i) spill.segment<3>(3 * j).noalias() += b.transpose() * xi;
+            }
+            y.segment<3>(3 * i) += sign * sum;
+        }
+        if (nt > 1) {
+#pragma omp barrier
+            const std::int64_t n = 3 * a.rows, begin = n * t / nt, end = n * (t + 1) / nt;
+            for (int u = 0; u + 1 < nt; ++u) y.segment(begin, end - begin) += scratch[std::size_t(u)].segment(begin, end - begin);
+        }
+    }
+}
+
+template <class Scalar>
 BlockMatrixT<Scalar> galerkin_product(const BlockMatrixT<Scalar>& a, const BlockMatrixT<Scalar>& p, const TransposedPattern& t) {
-    return build_by_rows<Scalar>(
+    return build_by_pattern<Scalar>(
         p.cols, p.cols,
+        [&](std::int64_t c, auto&& mark) {
+            for (std::int64_t q = t.start[std::size_t(c)]; q < t.start[std::size_t(c + 1)]; ++q) {
+                const std::int64_t i = t.row[std::size_t(q)];
+                for (std::int64_t r = a.start[std::size_t(i)]; r < a.start[std::size_t(i + 1)]; ++r) {
+                    const std::int64_t k = a.column[std::size_t(r)];
+                    for (std::int64_t s = p.start[std::size_t(k)]; s < p.start[std::size_t(k + 1)]; ++s) mark(p.column[std::size_t(s)]);
+                }
+            }
+        },
         [&](std::int64_t c, auto&& block) {
             for (std::int64_t q = t.start[std::size_t(c)]; q < t.start[std::size_t(c + 1)]; ++q) {
                 const std::int64_t i = t.row[std::size_t(q)];
@@ -127,15 +205,7 @@ BlockMatrixT<Scalar> galerkin_product(const BlockMatrixT<Scalar>& a, const Block
                 }
             }
         },
-        [&](std::int64_t c) {
-            // at most the coarse neighbours within two fine rows; a loose bound (only reserved)
-            std::int64_t bound = 0;
-            for (std::int64_t q = t.start[std::size_t(c)]; q < t.start[std::size_t(c + 1)]; ++q) {
-                const std::int64_t i = t.row[std::size_t(q)];
-                bound += 2 * (a.start[std::size_t(i + 1)] - a.start[std::size_t(i)]);
-            }
-            return bound;
-        });
+        [](std::int64_t, const std::int32_t*, Eigen::Matrix3d*, std::size_t) {});
 }
 
 namespace {
@@ -148,21 +218,29 @@ BlockMatrixT<Scalar> build_prolongator(std::int64_t n, const std::vector<Eigen::
                                        std::int64_t aggregate_count, double omega, VisitRow visit_row) {
     // P's rows: (A_F T)(i, ·) accumulated in double, then −ω D_i⁻¹ times it plus weight_i·I3 on
     // the aggregate of i, before the blocks are rounded to Scalar.
-    return build_by_rows<Scalar>(
+    const auto is_strong = [&](std::int64_t i, std::int64_t j) {
+        const auto first = strong.neighbour.begin() + strong.start[std::size_t(i)];
+        const auto last = strong.neighbour.begin() + strong.start[std::size_t(i + 1)];
+        return j == i || std::find(first, last, std::int32_t(j)) != last;
+    };
+    return build_by_pattern<Scalar>(
         n, aggregate_count,
+        [&](std::int64_t i, auto&& mark) {
+            mark(aggregate[std::size_t(i)]);
+            visit_row(i, [&](std::int64_t j, const auto&) {
+                if (is_strong(i, j)) mark(aggregate[std::size_t(j)]);
+            });
+        },
         [&](std::int64_t i, auto&& block) {
             const std::int32_t own = aggregate[std::size_t(i)];
             block(own);  // the aggregate of i is always present
-            const auto first = strong.neighbour.begin() + strong.start[std::size_t(i)];
-            const auto last = strong.neighbour.begin() + strong.start[std::size_t(i + 1)];
             visit_row(i, [&](std::int64_t j, const Eigen::Matrix3d& a_ij) {
-                if (j == i || std::find(first, last, std::int32_t(j)) != last)
+                if (is_strong(i, j))
                     block(aggregate[std::size_t(j)]) += weight[std::size_t(j)] * a_ij;
                 else  // weak: lumped into the diagonal block of A_F
                     block(own) += weight[std::size_t(i)] * a_ij;
             });
         },
-        [&](std::int64_t i) { return 1 + strong.start[std::size_t(i + 1)] - strong.start[std::size_t(i)]; },
         [&](std::int64_t i, const std::int32_t* columns, Eigen::Matrix3d* blocks, std::size_t count) {
             for (std::size_t q = 0; q < count; ++q) {
                 blocks[q] = (-omega * inverse_diagonal[std::size_t(i)] * blocks[q]).eval();
@@ -261,6 +339,9 @@ void block_row_norms(const BlockMatrixT<Scalar>& a, std::int64_t i, std::vector<
     template std::vector<Eigen::Matrix3d> diagonal_blocks(const BlockMatrixT<Scalar>&);                                 \
     template void block_row_norms(const BlockMatrixT<Scalar>&, std::int64_t, std::vector<double>&, BlockRowNorms&);   \
     template TransposedPattern transposed_pattern(const BlockMatrixT<Scalar>&);                                          \
+    template void keep_upper_triangle(BlockMatrixT<Scalar>&);                                                          \
+    template void multiply_symmetric_upper(const BlockMatrixT<Scalar>&, const Eigen::VectorXd&, Eigen::VectorXd&,       \
+                                           std::vector<Eigen::VectorXd>&, bool);                                        \
     template BlockMatrixT<Scalar> galerkin_product(const BlockMatrixT<Scalar>&, const BlockMatrixT<Scalar>&,            \
                                                    const TransposedPattern&);
 DSREG_BLOCK_SPARSE_INSTANTIATE(double)

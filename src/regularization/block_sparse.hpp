@@ -8,6 +8,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cassert>
 #include <cstdint>
 #include <vector>
 
@@ -39,6 +40,8 @@ struct BlockMatrixT {
     Eigen::Matrix3d block_at(std::int64_t q) const { return block[std::size_t(q)].template cast<double>(); }
     /// y = A x (parallel over block rows).
     void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+    /// y −= A x (parallel over block rows; no product vector).
+    void multiply_subtract(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
     /// y = Aᵀ x (parallel over block rows; `scratch` holds one accumulator per thread).
     void multiply_transposed(const Eigen::VectorXd& x, Eigen::VectorXd& y, std::vector<Eigen::VectorXd>& scratch) const;
     /// The same matrix as scalar column-major CSC (for CHOLMOD on the coarsest level).
@@ -46,12 +49,51 @@ struct BlockMatrixT {
 };
 using BlockMatrix = BlockMatrixT<double>;
 
+/// The accumulators of one block row while it is built (Gustavson): block(j) is a zero-initialized
+/// 3×3 double accumulator for column j, created at its first use; columns keep that order.
+class BlockRowAccumulator {
+public:
+    explicit BlockRowAccumulator(std::int64_t cols) : slot_(static_cast<std::size_t>(cols), -1) {}
+    Eigen::Matrix3d& block(std::int32_t j) {
+        std::int32_t& s = slot_[std::size_t(j)];
+        if (s < 0) {
+            s = std::int32_t(blocks_.size());
+            columns_.push_back(j);
+            blocks_.push_back(Eigen::Matrix3d::Zero());
+        }
+        return blocks_[std::size_t(s)];
+    }
+    /// Counts column j once (a pattern pass: a row uses either mark or block); count() gives the
+    /// distinct columns since clear().
+    void mark(std::int32_t j) {
+        std::int32_t& s = slot_[std::size_t(j)];
+        if (s < 0) {
+            s = 0;
+            columns_.push_back(j);
+        }
+    }
+    std::size_t count() const { return columns_.size(); }
+    std::int32_t* columns() { return columns_.data(); }
+    Eigen::Matrix3d* blocks() { return blocks_.data(); }
+    void clear() {
+        for (std::int32_t j : columns_) slot_[std::size_t(j)] = -1;
+        columns_.clear();
+        blocks_.clear();
+    }
+
+private:
+    std::vector<std::int32_t> slot_;  ///< per column: its accumulator in this row, or −1
+    std::vector<std::int32_t> columns_;
+    std::vector<Eigen::Matrix3d> blocks_;
+};
+
 /// Builds a block matrix row by row in parallel (Gustavson): `fill_row(i, block)` adds into
 /// `block(j)`, a zero-initialized 3×3 double accumulator for column j of row i; `row_bound(i)` is
 /// an upper bound on the blocks of row i. Each thread fills a contiguous range of rows into a
 /// piece reserved from the bounds (no reallocation: memory is touched once), then copies it into
 /// place. When a row is complete, `finish_row(i, columns, blocks, count)` may still change its
-/// accumulators; then they are rounded to Scalar.
+/// accumulators; then they are rounded to Scalar. (build_by_pattern needs no pieces, where a
+/// row's columns are cheap to list.)
 template <class Scalar, class FillRow, class RowBound, class FinishRow>
 BlockMatrixT<Scalar> build_by_rows(std::int64_t rows, std::int64_t cols, FillRow fill_row, RowBound row_bound, FinishRow finish_row) {
     using Block = typename BlockMatrixT<Scalar>::Block;
@@ -66,31 +108,20 @@ BlockMatrixT<Scalar> build_by_rows(std::int64_t rows, std::int64_t cols, FillRow
     {
         const int t = omp_get_thread_num(), nt = omp_get_num_threads();
         const std::int64_t first = rows * t / nt, last = rows * (t + 1) / nt;
-        std::vector<std::int32_t> slot(static_cast<std::size_t>(cols), -1);
+        BlockRowAccumulator row(cols);
         std::int64_t bound = 0;
         for (std::int64_t i = first; i < last; ++i) bound += std::min<std::int64_t>(row_bound(i), cols);
         std::vector<std::int32_t> columns;
         std::vector<Block> blocks;
-        std::vector<Eigen::Matrix3d> row;  // the accumulators of the current row
         columns.reserve(std::size_t(bound));
         blocks.reserve(std::size_t(bound));
         for (std::int64_t i = first; i < last; ++i) {
-            const std::size_t row_begin = columns.size();
             row.clear();
-            const auto block = [&](std::int32_t j) -> Eigen::Matrix3d& {
-                std::int32_t& s = slot[std::size_t(j)];
-                if (s < 0) {
-                    s = std::int32_t(row.size());
-                    columns.push_back(j);
-                    row.push_back(Eigen::Matrix3d::Zero());
-                }
-                return row[std::size_t(s)];
-            };
-            fill_row(i, block);
-            finish_row(i, columns.data() + row_begin, row.data(), row.size());
-            for (std::size_t q = row_begin; q < columns.size(); ++q) slot[std::size_t(columns[q])] = -1;
-            for (const Eigen::Matrix3d& b : row) blocks.push_back(b.cast<Scalar>());
-            row_count[std::size_t(i)] = std::int64_t(columns.size() - row_begin);
+            fill_row(i, [&](std::int32_t j) -> Eigen::Matrix3d& { return row.block(j); });
+            finish_row(i, row.columns(), row.blocks(), row.count());
+            columns.insert(columns.end(), row.columns(), row.columns() + row.count());
+            for (std::size_t q = 0; q < row.count(); ++q) blocks.push_back(row.blocks()[q].cast<Scalar>());
+            row_count[std::size_t(i)] = std::int64_t(row.count());
         }
         piece_first[std::size_t(t) + 1] = std::int64_t(columns.size());
 #pragma omp barrier
@@ -111,6 +142,65 @@ template <class Scalar, class FillRow, class RowBound>
 BlockMatrixT<Scalar> build_by_rows(std::int64_t rows, std::int64_t cols, FillRow fill_row, RowBound row_bound) {
     return build_by_rows<Scalar>(rows, cols, fill_row, row_bound, [](std::int64_t, const std::int32_t*, Eigen::Matrix3d*, std::size_t) {});
 }
+
+/// Builds a block matrix row by row in parallel in two passes: `row_pattern(i, mark)` calls
+/// mark(j) for every column j of row i (repeats allowed), which sizes the matrix exactly; then
+/// `fill_row(i, block)` and `finish_row` as in build_by_rows (fill_row must create the same
+/// columns) write each row straight into place. No piece is copied, so the matrix is the only
+/// memory the build touches (the pieces of build_by_rows double it for a moment: the multigrid
+/// set-up's peak on lobster.vol).
+template <class Scalar, class RowPattern, class FillRow, class FinishRow>
+BlockMatrixT<Scalar> build_by_pattern(std::int64_t rows, std::int64_t cols, RowPattern row_pattern, FillRow fill_row, FinishRow finish_row) {
+    const int threads = rows >= kParallelMinRows ? omp_get_max_threads() : 1;
+    BlockMatrixT<Scalar> out;
+    out.rows = rows;
+    out.cols = cols;
+    out.start.assign(std::size_t(rows + 1), 0);
+#pragma omp parallel num_threads(threads)
+    {
+        BlockRowAccumulator row(cols);
+#pragma omp for schedule(static)
+        for (std::int64_t i = 0; i < rows; ++i) {
+            row.clear();
+            row_pattern(i, [&](std::int32_t j) { row.mark(j); });
+            out.start[std::size_t(i + 1)] = std::int64_t(row.count());
+        }
+#pragma omp single
+        {
+            for (std::int64_t i = 0; i < rows; ++i) out.start[std::size_t(i + 1)] += out.start[std::size_t(i)];
+            out.column.resize(std::size_t(out.start.back()));
+            out.block.resize(std::size_t(out.start.back()));
+        }  // implicit barrier
+#pragma omp for schedule(static)
+        for (std::int64_t i = 0; i < rows; ++i) {
+            row.clear();
+            fill_row(i, [&](std::int32_t j) -> Eigen::Matrix3d& { return row.block(j); });
+            finish_row(i, row.columns(), row.blocks(), row.count());
+            const std::size_t first = std::size_t(out.start[std::size_t(i)]);
+            const std::size_t count = std::size_t(out.start[std::size_t(i + 1)]) - first;
+            assert(row.count() == count);  // else row_pattern and fill_row disagree
+            for (std::size_t q = 0; q < std::min(row.count(), count); ++q) {
+                out.column[first + q] = row.columns()[q];
+                out.block[first + q] = row.blocks()[q].template cast<Scalar>();
+            }
+        }
+    }
+    return out;
+}
+
+/// Keeps the upper triangle (the blocks with column ≥ row) of a symmetric block matrix, in place,
+/// and gives the memory of the rest back.
+template <class Scalar>
+void keep_upper_triangle(BlockMatrixT<Scalar>& a);
+
+/// y = A x, or y −= A x if `subtract`, for the symmetric A whose upper triangle is `upper`
+/// (keep_upper_triangle): each stored block A_ij gives A_ij x_j to row i and A_ijᵀ x_i to row j,
+/// so a level needs half its blocks and reads each once. Rows in parallel, in one contiguous range
+/// per thread; what a thread adds to rows beyond its range goes to its accumulator in `scratch`
+/// (one per thread but the last, whose range ends the matrix), and the accumulators are summed.
+template <class Scalar>
+void multiply_symmetric_upper(const BlockMatrixT<Scalar>& upper, const Eigen::VectorXd& x, Eigen::VectorXd& y,
+                              std::vector<Eigen::VectorXd>& scratch, bool subtract);
 
 /// The pattern of Pᵀ for a block matrix P, pointing into P's blocks instead of copying them (12
 /// bytes per block instead of 40–76): row a of Pᵀ holds the blocks P(row[q], a) = P.block[source[q]]

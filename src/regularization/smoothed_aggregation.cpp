@@ -15,13 +15,25 @@ namespace dsreg::detail {
 
 template <class Scalar>
 struct SmoothedAggregation<Scalar>::Level {
-    Matrix op;  ///< level 0: R without its weak blocks (filtered_blocks); then Pᵀ A P
+    /// level 0: R without its weak blocks (filtered_blocks); then Pᵀ A P. Once the next level is
+    /// built, only its upper triangle is kept (upper_only; multiply_symmetric_upper).
+    Matrix op;
+    bool upper_only = false;
+    std::int64_t blocks = 0;  ///< of the whole op (both triangles): operator_complexity()
     std::int64_t nodes = 0;
     std::vector<typename Matrix::Block> inverse_diagonal;
     double lambda_max = 0;  ///< upper estimate of the largest eigenvalue of D⁻¹A (Lanczos)
     Matrix prolongator;     ///< P: next coarser level → this level
-    mutable Eigen::VectorXd residual, direction, preconditioned, coarse_rhs, coarse_solution, masked;
+    mutable Eigen::VectorXd residual, direction, coarse_rhs, coarse_solution, masked;
     mutable std::vector<Eigen::VectorXd> restriction_scratch;  ///< Pᵀ r: one accumulator per thread
+    mutable std::vector<Eigen::VectorXd> product_scratch;      ///< A x with upper_only: multiply_symmetric_upper
+
+    /// y = A x, or y −= A x if `subtract`.
+    void apply(const Eigen::VectorXd& x, Eigen::VectorXd& y, bool subtract) const {
+        if (upper_only) multiply_symmetric_upper(op, x, y, product_scratch, subtract);
+        else if (subtract) op.multiply_subtract(x, y);
+        else op.multiply(x, y);
+    }
 };
 
 template <class Scalar>
@@ -381,8 +393,8 @@ void SmoothedAggregation<Scalar>::build(Matrix fine) {
     std::vector<double> weight(static_cast<std::size_t>(level->nodes), 1.0);  // translations restricted to the level
     while (true) {
         Level& L = *level;
-        const std::vector<Eigen::Matrix3d> diagonal = diagonal_blocks(L.op);
-        const std::vector<Eigen::Matrix3d> inverse_diagonal = inverted(diagonal);
+        std::vector<Eigen::Matrix3d> diagonal = diagonal_blocks(L.op);
+        std::vector<Eigen::Matrix3d> inverse_diagonal = inverted(diagonal);
         L.inverse_diagonal.resize(inverse_diagonal.size());
         for (std::size_t i = 0; i < inverse_diagonal.size(); ++i) L.inverse_diagonal[i] = inverse_diagonal[i].template cast<Scalar>();
         if (L.nodes <= settings_.coarsest_nodes || int(levels_.size()) + 1 >= settings_.max_levels) break;
@@ -390,7 +402,7 @@ void SmoothedAggregation<Scalar>::build(Matrix fine) {
         // sets ω and the Chebyshev interval
         L.lambda_max = largest_eigenvalue_bound(L.op, diagonal, inverse_diagonal, 12);
 
-        const StrengthGraph strong = strong_couplings(L.op, L.nodes, diagonal, settings_.strength_threshold);
+        StrengthGraph strong = strong_couplings(L.op, L.nodes, diagonal, settings_.strength_threshold);
         std::int64_t aggregates = 0;
         const std::vector<std::int32_t> aggregate = aggregate_level(L.op, diagonal, strong, aggregates);
         if (aggregates > L.nodes * 4 / 5) break;  // no real coarsening left: factor this level
@@ -403,14 +415,25 @@ void SmoothedAggregation<Scalar>::build(Matrix fine) {
 
         const double omega = settings_.prolongator_damping / L.lambda_max;
         L.prolongator = smoothed_prolongator(L.op, inverse_diagonal, strong, aggregate, tentative, aggregates, omega);
+        // The Galerkin product below is the set-up's largest transient: what only the prolongator
+        // needed goes first (lobster.vol: 45 MB of double blocks and the graph at the finest level).
+        std::vector<Eigen::Matrix3d>().swap(diagonal);
+        std::vector<Eigen::Matrix3d>().swap(inverse_diagonal);
+        strong = StrengthGraph{};
         auto next = std::make_unique<Level>();
         next->op = galerkin_product(L.op, L.prolongator, transposed_pattern(L.prolongator));  // Pᵀ A P
         symmetrize(next->op);
+        // L's rows are not read any more, only its products: half its blocks suffice (lobster.vol:
+        // 1.5M of the hierarchy's 3.1M blocks).
+        L.blocks = L.op.block_count();
+        keep_upper_triangle(L.op);
+        L.upper_only = true;
         next->nodes = aggregates;
         weight.swap(coarse_weight);
         levels_.push_back(std::move(level));
         level = std::move(next);
     }
+    level->blocks = level->op.block_count();
     factor_coarsest(level->op.to_scalar());
     levels_.push_back(std::move(level));
 }
@@ -424,7 +447,7 @@ int SmoothedAggregation<Scalar>::level_count() const { return int(levels_.size()
 template <class Scalar>
 double SmoothedAggregation<Scalar>::operator_complexity() const {
     double entries = 0;
-    for (const auto& L : levels_) entries += 9.0 * double(L->op.block_count());
+    for (const auto& L : levels_) entries += 9.0 * double(L->blocks);
     return entries / fine_nonzeros_;
 }
 
@@ -464,17 +487,28 @@ void SmoothedAggregation<Scalar>::mask_held(Eigen::VectorXd& v) const {
 }
 
 template <class Scalar>
+void SmoothedAggregation<Scalar>::subtract_product(std::size_t index, const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+    const Level& L = *levels_[index];
+    if (index > 0 || held_.empty()) {
+        L.apply(x, y, true);
+        return;
+    }
+    multiply_level(index, x, held_product_);
+    y -= held_product_;
+}
+
+template <class Scalar>
 void SmoothedAggregation<Scalar>::multiply_level(std::size_t index, const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
     const Level& L = *levels_[index];
     if (index > 0 || held_.empty()) {
-        L.op.multiply(x, y);
+        L.apply(x, y, false);
         return;
     }
     // A_held x: A on the free coordinates, the diagonal on the held ones.
     Eigen::VectorXd& free = L.masked;
     free = x;
     mask_held(free);
-    L.op.multiply(free, y);
+    L.apply(free, y, false);
 #pragma omp parallel for schedule(static) if (y.size() >= 3 * kParallelMinRows)
     for (Eigen::Index q = 0; q < y.size(); ++q)
         if (held_[std::size_t(q)]) y[q] = held_diagonal_[q] * x[q];
@@ -518,16 +552,24 @@ void SmoothedAggregation<Scalar>::smooth(std::size_t index, const Eigen::VectorX
         multiply_level(index, x, L.residual);
         L.residual = b - L.residual;
     }
-    apply_block_diagonal(inverse_diagonal, L.residual, L.preconditioned);
-    L.direction = L.preconditioned / theta;
+    // d = D⁻¹r / θ, then per step x += d, r −= A d, d = ρ'ρ d + (2ρ'/δ) D⁻¹r: each product of
+    // A or D⁻¹ goes straight into the vector it updates (one vector less to store and stream).
+    L.direction.resize(L.residual.size());
+    const auto update_direction = [&](bool first, double keep, double add) {
+#pragma omp parallel for schedule(static) if (std::int64_t(inverse_diagonal.size()) >= kParallelMinRows)
+        for (std::int64_t i = 0; i < std::int64_t(inverse_diagonal.size()); ++i) {
+            const Eigen::Vector3d step = inverse_diagonal[std::size_t(i)].template cast<double>() * L.residual.template segment<3>(3 * i);
+            if (first) L.direction.template segment<3>(3 * i) = step / theta;
+            else L.direction.template segment<3>(3 * i) = keep * L.direction.template segment<3>(3 * i) + add * step;
+        }
+    };
+    update_direction(true, 0, 0);
     for (int k = 1;; ++k) {
         x += L.direction;
         if (k == settings_.smoothing_degree) break;
-        multiply_level(index, L.direction, L.preconditioned);
-        L.residual -= L.preconditioned;
-        apply_block_diagonal(inverse_diagonal, L.residual, L.preconditioned);
+        subtract_product(index, L.direction, L.residual);
         const double rho_next = 1 / (2 * sigma - rho);
-        L.direction = (rho_next * rho) * L.direction + (2 * rho_next / delta) * L.preconditioned;
+        update_direction(false, rho_next * rho, 2 * rho_next / delta);
         rho = rho_next;
     }
 }

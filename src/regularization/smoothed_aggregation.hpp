@@ -104,6 +104,7 @@ private:
     void vcycle(std::size_t level, const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
     void smooth(std::size_t level, const Eigen::VectorXd& b, Eigen::VectorXd& x, bool zero_guess) const;
     void multiply_level(std::size_t level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+    void subtract_product(std::size_t level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const;  ///< y −= A_level x
     void mask_held(Eigen::VectorXd& v) const;
 
     AmgSettings settings_;
@@ -112,6 +113,7 @@ private:
     std::unique_ptr<Coarsest> coarsest_;
     std::vector<char> held_;  ///< per coordinate of the finest level; empty: nothing held
     Eigen::VectorXd held_diagonal_;
+    mutable Eigen::VectorXd held_product_;  ///< A_held x on the finest level, while coordinates are held
     std::vector<typename Matrix::Block> held_inverse_diagonal_;
 };
 
