@@ -74,7 +74,9 @@ RegularizationResult regularize(const DigitalSurface& surface, const PointMatrix
     const std::vector<detail::MeshPart> parts =
         detail::mesh_parts(surface.quads, links, n, detail::kSmallComponentVertices, detail::kBatchVertices);
     result.assembly_seconds = seconds_since(started);
-    Eigen::VectorXd x = flatten_points(surface.vertices);  // warm start at p
+    // The solution, made after the first part's solve (the largest: not beside its multigrid
+    // hierarchy); the vertices of the parts not solved yet keep p.
+    Eigen::VectorXd x;
     MergedReport merged;
     double done = 0;
     for (const detail::MeshPart& part : parts) {
@@ -83,12 +85,13 @@ RegularizationResult regularize(const DigitalSurface& surface, const PointMatrix
         o.progress = detail::progress_share(options.progress, done, share);
         detail::visit_part(part, surface.vertices, surface.quads, links, normals, weights, [&](const detail::PartView& mesh) {
             started = Clock::now();
-            Eigen::VectorXd local = detail::gather_part(part, x);
+            Eigen::VectorXd local = flatten_points(mesh.positions);  // warm start at p
             const detail::MeshSystem system(mesh.positions, mesh.quads, mesh.links, mesh.normals, mesh.weights);
             result.assembly_seconds += seconds_since(started);
             started = Clock::now();
             const SolveReport r = detail::solve_system(system.system(), system.rhs(), local, o);
             result.solve_seconds += seconds_since(started);
+            if (x.size() == 0) x = flatten_points(surface.vertices);
             detail::scatter_part(part, local, x);
             const double rhs_norm = system.rhs().norm();
             merged.add(r, part, r.relative_residual * (rhs_norm > 0 ? rhs_norm : 1.0), rhs_norm);

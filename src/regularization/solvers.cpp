@@ -148,7 +148,6 @@ SolveReport solve_auto(const detail::SpdSystem& system, const Eigen::VectorXd& b
         report.note = "auto: data weight " + format_number("%.1e", ratio) + " of the diagonal is too small for amg";
         return report;
     }
-    const Eigen::VectorXd guess = x;
     SolveReport report;
     const int cap = std::min(options.max_iterations, kAutoAmgMaxIterations);
     std::string why;
@@ -161,8 +160,7 @@ SolveReport solve_auto(const detail::SpdSystem& system, const Eigen::VectorXd& b
     } catch (const Error& e) {  // e.g. a CG breakdown: the direct solver decides whether R is SPD
         why = std::string("amg failed (") + e.what() + ")";
     }
-    x = guess;
-    report = solve_cholmod(system, b, x);
+    report = solve_cholmod(system, b, x);  // a direct solve: x is only written
     report.note = "auto: " + why;
     return report;
 }
