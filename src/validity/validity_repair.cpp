@@ -425,14 +425,24 @@ private:
     void part_system(const std::vector<std::int32_t>& part, SparseMatrix& matrix, Eigen::VectorXd& b) const {
         constexpr std::size_t kChunkVertices = 4096;
         const Eigen::Index n = 3 * Eigen::Index(part.size());
-        Eigen::SparseMatrix<double, Eigen::RowMajor> rows(n, n), chunk;
         std::vector<Eigen::Triplet<double>> entries;
-        for (std::size_t first = 0; first < part.size(); first += kChunkVertices) {
-            const std::size_t last = std::min(part.size(), first + kChunkVertices);
+        const auto collect = [&](std::size_t first, std::size_t last) {  // the entries of [first, last), rows from 0
             const Eigen::Index offset = 3 * Eigen::Index(first);
             entries.clear();
             visit_part_system(
                 part, [&](Eigen::Index r, Eigen::Index c, double value) { entries.emplace_back(r - offset, c, value); }, b, first, last);
+        };
+        if (part.size() <= kChunkVertices) {  // one chunk: straight to column-major
+            collect(0, part.size());
+            matrix.resize(n, n);
+            matrix.setFromTriplets(entries.begin(), entries.end());
+            return;
+        }
+        Eigen::SparseMatrix<double, Eigen::RowMajor> rows(n, n), chunk;
+        for (std::size_t first = 0; first < part.size(); first += kChunkVertices) {
+            const std::size_t last = std::min(part.size(), first + kChunkVertices);
+            const Eigen::Index offset = 3 * Eigen::Index(first);
+            collect(first, last);
             chunk.resize(3 * Eigen::Index(last - first), n);
             chunk.setFromTriplets(entries.begin(), entries.end());
             rows.reserve(std::max(chunk.nonZeros(), rows.nonZeros()));  // room for this many more (doubling)
