@@ -38,6 +38,8 @@ struct MetaHeader {
 
 using Fields = std::map<std::string, std::string>;
 
+constexpr std::size_t kMaxKeyBytes = 200;  ///< the text before '=' (ITK's field names hold 254)
+
 Fields read_fields(InputFile& file) {
     Fields fields;
     std::string line;
@@ -49,6 +51,11 @@ Fields read_fields(InputFile& file) {
         const std::string key = equals == std::string::npos ? "" : to_lower(trim(line.substr(0, equals)));
         if (key.empty())
             file.fail("header line " + std::to_string(line_number) + " is not 'Key = Value': " + quote_excerpt(line));
+        // ITK's MetaIO copies each key into a 255-byte field name without a bound (a longer one
+        // overflows it: found by fuzzing); no MetaImage key is near this long.
+        if (equals > kMaxKeyBytes)
+            file.fail("header line " + std::to_string(line_number) + " has a key of " + std::to_string(equals) +
+                      " bytes (MetaImage keys are words, at most " + std::to_string(kMaxKeyBytes) + " bytes here)");
         if (!fields.emplace(key, trim(line.substr(equals + 1))).second)
             file.fail("key '" + trim(line.substr(0, equals)) + "' appears twice (line " + std::to_string(line_number) + ")");
         if (key == "elementdatafile") return fields;  // the data (if LOCAL) starts on the next line
