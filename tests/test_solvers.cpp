@@ -310,8 +310,8 @@ detail::BlockMatrixT<Scalar> random_symmetric_blocks(std::int64_t n, std::mt1993
 double relative_distance(const Eigen::VectorXd& a, const Eigen::VectorXd& b) { return (a - b).norm() / b.norm(); }
 
 TEST(BlockSparse, UpperTriangleProductIsTheFullProduct) {
-    // The coarse levels keep the upper triangle only: their product (and y −= A x) must be the
-    // full matrix's, with one thread or several (the rows beyond a thread's range are summed from
+    // The levels keep the upper triangle only: their product (and y −= A x) must be the full
+    // matrix's, with one thread or several (the rows beyond a thread's range are summed from
     // its accumulator), in both precisions of the hierarchy.
     std::mt19937 rng(11);
     std::normal_distribution<double> normal;
@@ -329,14 +329,12 @@ TEST(BlockSparse, UpperTriangleProductIsTheFullProduct) {
             for (const int t : {1, 2, 3}) {
                 omp_set_num_threads(t);
                 std::vector<Eigen::VectorXd> scratch;
-                Eigen::VectorXd y(3 * n), z = w, v = w;
+                Eigen::VectorXd y(3 * n), z = w;
                 y.setConstant(std::nan(""));  // every entry must be written
                 detail::multiply_symmetric_upper(upper, x, y, scratch, false);
                 detail::multiply_symmetric_upper(upper, x, z, scratch, true);
-                full.multiply_subtract(x, v);
                 EXPECT_LT(relative_distance(y, product), 1e-14) << t << " threads";
                 EXPECT_LT(relative_distance(z, w - product), 1e-14) << t << " threads";
-                EXPECT_LT(relative_distance(v, w - product), 1e-15) << t << " threads";
             }
             omp_set_num_threads(threads);
         };

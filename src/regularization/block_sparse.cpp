@@ -41,32 +41,16 @@ ScalarRows row_view(const Eigen::SparseMatrix<double>& s) {
     return ScalarRows(s.rows(), s.cols(), s.nonZeros(), s.outerIndexPtr(), s.innerIndexPtr(), s.valuePtr());
 }
 
-namespace {
-
-/// y_i = A_i x, or y_i −= A_i x when `subtract`, for every block row i (in parallel).
-template <bool subtract, class Scalar>
-void multiply_rows(const BlockMatrixT<Scalar>& a, const Eigen::VectorXd& x, Eigen::VectorXd& y) {
-#pragma omp parallel for schedule(static) if (a.rows >= kParallelMinRows)
-    for (std::int64_t i = 0; i < a.rows; ++i) {
-        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-        for (std::int64_t q = a.start[std::size_t(i)]; q < a.start[std::size_t(i + 1)]; ++q)
-            sum.noalias() += a.block[std::size_t(q)].template cast<double>() * x.segment<3>(3 * std::int64_t(a.column[std::size_t(q)]));
-        if constexpr (subtract) y.segment<3>(3 * i) -= sum;
-        else y.segment<3>(3 * i) = sum;
-    }
-}
-
-}  // namespace
-
 template <class Scalar>
 void BlockMatrixT<Scalar>::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
     y.resize(3 * rows);
-    multiply_rows<false>(*this, x, y);
-}
-
-template <class Scalar>
-void BlockMatrixT<Scalar>::multiply_subtract(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
-    multiply_rows<true>(*this, x, y);
+#pragma omp parallel for schedule(static) if (rows >= kParallelMinRows)
+    for (std::int64_t i = 0; i < rows; ++i) {
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        for (std::int64_t q = start[std::size_t(i)]; q < start[std::size_t(i + 1)]; ++q)
+            sum.noalias() += block[std::size_t(q)].template cast<double>() * x.segment<3>(3 * std::int64_t(column[std::size_t(q)]));
+        y.segment<3>(3 * i) = sum;
+    }
 }
 
 template <class Scalar>

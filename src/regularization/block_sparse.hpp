@@ -40,8 +40,6 @@ struct BlockMatrixT {
     Eigen::Matrix3d block_at(std::int64_t q) const { return block[std::size_t(q)].template cast<double>(); }
     /// y = A x (parallel over block rows).
     void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
-    /// y −= A x (parallel over block rows; no product vector).
-    void multiply_subtract(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
     /// y = Aᵀ x (parallel over block rows; `scratch` holds one accumulator per thread).
     void multiply_transposed(const Eigen::VectorXd& x, Eigen::VectorXd& y, std::vector<Eigen::VectorXd>& scratch) const;
     /// The same matrix as scalar column-major CSC (for CHOLMOD on the coarsest level).

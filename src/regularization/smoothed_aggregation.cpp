@@ -16,9 +16,9 @@ namespace dsreg::detail {
 template <class Scalar>
 struct SmoothedAggregation<Scalar>::Level {
     /// level 0: R without its weak blocks (filtered_blocks); then Pᵀ A P. Once the next level is
-    /// built, only its upper triangle is kept (upper_only; multiply_symmetric_upper).
+    /// built (every level but the coarsest, which is factored), only its upper triangle is kept:
+    /// the V-cycle multiplies by it with multiply_symmetric_upper.
     Matrix op;
-    bool upper_only = false;
     std::int64_t blocks = 0;  ///< of the whole op (both triangles): operator_complexity()
     std::int64_t nodes = 0;
     std::vector<typename Matrix::Block> inverse_diagonal;
@@ -26,14 +26,7 @@ struct SmoothedAggregation<Scalar>::Level {
     Matrix prolongator;     ///< P: next coarser level → this level
     mutable Eigen::VectorXd residual, direction, coarse_rhs, coarse_solution, masked;
     mutable std::vector<Eigen::VectorXd> restriction_scratch;  ///< Pᵀ r: one accumulator per thread
-    mutable std::vector<Eigen::VectorXd> product_scratch;      ///< A x with upper_only: multiply_symmetric_upper
-
-    /// y = A x, or y −= A x if `subtract`.
-    void apply(const Eigen::VectorXd& x, Eigen::VectorXd& y, bool subtract) const {
-        if (upper_only) multiply_symmetric_upper(op, x, y, product_scratch, subtract);
-        else if (subtract) op.multiply_subtract(x, y);
-        else op.multiply(x, y);
-    }
+    mutable std::vector<Eigen::VectorXd> product_scratch;      ///< A x: multiply_symmetric_upper
 };
 
 template <class Scalar>
@@ -427,7 +420,6 @@ void SmoothedAggregation<Scalar>::build(Matrix fine) {
         // 1.5M of the hierarchy's 3.1M blocks).
         L.blocks = L.op.block_count();
         keep_upper_triangle(L.op);
-        L.upper_only = true;
         next->nodes = aggregates;
         weight.swap(coarse_weight);
         levels_.push_back(std::move(level));
@@ -487,28 +479,22 @@ void SmoothedAggregation<Scalar>::mask_held(Eigen::VectorXd& v) const {
 }
 
 template <class Scalar>
-void SmoothedAggregation<Scalar>::subtract_product(std::size_t index, const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+void SmoothedAggregation<Scalar>::multiply_level(std::size_t index, const Eigen::VectorXd& x, Eigen::VectorXd& y, bool subtract) const {
     const Level& L = *levels_[index];
     if (index > 0 || held_.empty()) {
-        L.apply(x, y, true);
+        multiply_symmetric_upper(L.op, x, y, L.product_scratch, subtract);
         return;
     }
-    multiply_level(index, x, held_product_);
-    y -= held_product_;
-}
-
-template <class Scalar>
-void SmoothedAggregation<Scalar>::multiply_level(std::size_t index, const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
-    const Level& L = *levels_[index];
-    if (index > 0 || held_.empty()) {
-        L.apply(x, y, false);
+    if (subtract) {
+        multiply_level(index, x, held_product_, false);
+        y -= held_product_;
         return;
     }
     // A_held x: A on the free coordinates, the diagonal on the held ones.
     Eigen::VectorXd& free = L.masked;
     free = x;
     mask_held(free);
-    L.apply(free, y, false);
+    multiply_symmetric_upper(L.op, free, y, L.product_scratch, false);
 #pragma omp parallel for schedule(static) if (y.size() >= 3 * kParallelMinRows)
     for (Eigen::Index q = 0; q < y.size(); ++q)
         if (held_[std::size_t(q)]) y[q] = held_diagonal_[q] * x[q];
@@ -567,7 +553,7 @@ void SmoothedAggregation<Scalar>::smooth(std::size_t index, const Eigen::VectorX
     for (int k = 1;; ++k) {
         x += L.direction;
         if (k == settings_.smoothing_degree) break;
-        subtract_product(index, L.direction, L.residual);
+        multiply_level(index, L.direction, L.residual, true);  // r −= A d
         const double rho_next = 1 / (2 * sigma - rho);
         update_direction(false, rho_next * rho, 2 * rho_next / delta);
         rho = rho_next;

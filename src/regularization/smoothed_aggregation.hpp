@@ -103,8 +103,8 @@ private:
     void factor_coarsest(const Eigen::SparseMatrix<double>& matrix);
     void vcycle(std::size_t level, const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
     void smooth(std::size_t level, const Eigen::VectorXd& b, Eigen::VectorXd& x, bool zero_guess) const;
-    void multiply_level(std::size_t level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
-    void subtract_product(std::size_t level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const;  ///< y −= A_level x
+    /// y = A_level x, or y −= A_level x if `subtract` (A_held on the finest level while coordinates are held).
+    void multiply_level(std::size_t level, const Eigen::VectorXd& x, Eigen::VectorXd& y, bool subtract = false) const;
     void mask_held(Eigen::VectorXd& v) const;
 
     AmgSettings settings_;
