@@ -8,6 +8,7 @@
 // geometry (Offset, ElementSpacing, TransformMatrix) and must agree on the sizes and value type.
 // The payload (raw, or one zlib stream with CompressedData) is decoded here as it streams.
 // Not supported: ASCII data (BinaryData = False), data split over several files (LIST, patterns).
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -38,7 +39,18 @@ struct MetaHeader {
 
 using Fields = std::map<std::string, std::string>;
 
-constexpr std::size_t kMaxKeyBytes = 200;  ///< the text before '=' (ITK's field names hold 254)
+constexpr std::size_t kMaxKeyBytes = 200;        ///< the text before '=' (ITK's field names hold 254)
+constexpr std::size_t kMaxTextValueBytes = 200;  ///< a value that is not a list of numbers (ITK's text fields hold 254)
+
+/// Whether every word of `value` is a number (DimSize, ElementSpacing, TransformMatrix…).
+bool is_number_list(const std::string& value) {
+    for (const std::string& word : split_words(value)) {
+        char* end = nullptr;
+        std::strtod(word.c_str(), &end);
+        if (end != word.c_str() + word.size()) return false;
+    }
+    return true;
+}
 
 Fields read_fields(InputFile& file) {
     Fields fields;
@@ -56,7 +68,16 @@ Fields read_fields(InputFile& file) {
         if (equals > kMaxKeyBytes)
             file.fail("header line " + std::to_string(line_number) + " has a key of " + std::to_string(equals) +
                       " bytes (MetaImage keys are words, at most " + std::to_string(kMaxKeyBytes) + " bytes here)");
-        if (!fields.emplace(key, trim(line.substr(equals + 1))).second)
+        // Text values (Comment, Name, ObjectSubType…) are copied by MetaIO into 255-byte fields
+        // without a bound as well (found by trying every key with long values).
+        // Measured untrimmed: MetaIO may keep the spaces around it.
+        const std::string value = trim(line.substr(equals + 1));
+        const std::size_t value_bytes = line.size() - equals - 1;
+        if (value_bytes > kMaxTextValueBytes && !is_number_list(value))
+            file.fail("header line " + std::to_string(line_number) + ": the value of '" + trim(line.substr(0, equals)) +
+                      "' is " + std::to_string(value_bytes) + " bytes of text (at most " +
+                      std::to_string(kMaxTextValueBytes) + " here: ITK's MetaImage reader cannot hold longer ones)");
+        if (!fields.emplace(key, value).second)
             file.fail("key '" + trim(line.substr(0, equals)) + "' appears twice (line " + std::to_string(line_number) + ")");
         if (key == "elementdatafile") return fields;  // the data (if LOCAL) starts on the next line
     }

@@ -25,6 +25,7 @@ namespace {
 
 /// Generous: a header is a few hundred bytes; long "space directions" or comments stay far below.
 constexpr std::uint64_t kMaxHeaderBytes = 1 << 20;
+constexpr std::size_t kMaxFieldLineBytes = 400;  ///< a field line but content and sample units (teem's messages hold ~1 KiB)
 
 struct NrrdHeader {
     std::vector<std::int64_t> sizes;
@@ -60,6 +61,13 @@ Fields read_fields(InputFile& file) {
         if (colon == std::string::npos)
             file.fail("header line " + std::to_string(line_number) + " is not 'field: value': " + quote_excerpt(line));
         const std::string key = field_key(line.substr(0, colon));
+        // ITK's NRRD reader (teem) quotes a field it cannot parse into a message buffer of about
+        // 1 KiB without a bound (a 1 000-byte 'space' value overflows it: found by trying every
+        // field with long values); only the free-text fields are stored as they come.
+        if (line.size() > kMaxFieldLineBytes && key != "content" && key != "sampleunits")
+            file.fail("header line " + std::to_string(line_number) + " ('" + trim(line.substr(0, colon)).substr(0, 40) +
+                      "') is " + std::to_string(line.size()) + " bytes long (at most " +
+                      std::to_string(kMaxFieldLineBytes) + " here but for 'content' and 'sample units')");
         if (!fields.emplace(key, trim(line.substr(colon + 2))).second)
             file.fail("field '" + key + "' appears twice (line " + std::to_string(line_number) + ")");
     }
