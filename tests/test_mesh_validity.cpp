@@ -313,5 +313,31 @@ TEST(MeshValidity, FoldTestLooksAtEachTriangleOfTheSplit) {
     EXPECT_THROW(faces_folded_against_field(flat, quad, PointMatrix(2, 3)), Error);
 }
 
+TEST(MeshValidity, FoldedCornersAreTheApexesOfTheTurnedTriangles) {
+    const auto corners = [](const PointMatrix& p) {
+        return std::array<Eigen::Vector3d, 4>{p.row(0).transpose(), p.row(1).transpose(), p.row(2).transpose(),
+                                              p.row(3).transpose()};
+    };
+    const Eigen::Vector3d up(0, 0, 1);
+    const PointMatrix square = points({{0, 0, 0}, {2, 0, 0}, {2, 2, 0}, {0, 2, 0}});
+    EXPECT_EQ(folded_corners(corners(square), up), (std::array<bool, 4>{false, false, false, false}));
+    EXPECT_EQ(folded_corners(corners(square), -up), (std::array<bool, 4>{true, true, true, true}));  // turned over
+    // Vertex 2 beyond the diagonal 1–3 (a reflex corner): only corner 2 is folded.
+    const PointMatrix reflex = points({{0, 0, 0}, {2, 0, 0}, {0.7, 0.7, 0}, {0, 2, 0}});
+    EXPECT_EQ(folded_corners(corners(reflex), up), (std::array<bool, 4>{false, false, true, false}));
+    // Vertex 3 lifted across the diagonal 0–2: triangle (2,3,0) faces (0.5,−0.5,−0.6), the others +z.
+    const PointMatrix lifted = points({{0, 0, 0}, {3, 0, 0}, {1, 1, 0}, {1.2, 0.6, 0.5}});
+    EXPECT_EQ(folded_corners(corners(lifted), up), (std::array<bool, 4>{false, false, false, true}));
+    // Vertex 2 on the diagonal 1–3: no area at that corner counts as folded, as in the check.
+    const PointMatrix flat_corner = points({{0, 0, 0}, {2, 0, 0}, {1, 1, 0}, {0, 2, 0}});
+    EXPECT_EQ(folded_corners(corners(flat_corner), up), (std::array<bool, 4>{false, false, true, false}));
+    // The check calls a quad folded exactly when one of its corners is.
+    for (const PointMatrix* p : {&square, &reflex, &lifted, &flat_corner}) {
+        const std::array<bool, 4> folded = folded_corners(corners(*p), up);
+        const bool any = std::find(folded.begin(), folded.end(), true) != folded.end();
+        EXPECT_EQ(faces_folded_against_field(*p, faces({{0, 1, 2, 3}}), points({{0, 0, 1}})).size(), any ? 1u : 0u);
+    }
+}
+
 }  // namespace
 }  // namespace dsreg

@@ -148,6 +148,32 @@ TEST(ValidityRepair, AConstructedFoldComesOutValid) {
         if (c.surface.vertices(v, 2) < 8) EXPECT_EQ(r.positions.row(v), c.solved.positions.row(v)) << "vertex " << v;
 }
 
+TEST(ValidityRepair, AReflexCornerStrengthensItsApexOnly) {
+    // A valid solved ball; then one vertex of one quad is pushed beyond the diagonal between its
+    // two neighbours (the quad turns reflex there: one corner triangle against u). The repair
+    // pulls that vertex, not the whole quad: its three other corners get only the graded factor.
+    const BinaryVolume volume = test::make_ball(22, 9, 10.5);
+    const DigitalSurface surface = extract_digital_surface(volume, Connectivity::TwentySix);
+    const PointMatrix field = integral_invariant_normals(volume, surface, 3.0);
+    PointMatrix positions = regularize(surface, field, RegularizationWeights{}, cholmod()).positions;
+    ASSERT_TRUE(check_mesh_validity(positions, surface.quads, field).valid());
+    const std::int64_t f = surface.face_count() / 2;
+    const std::int32_t apex = surface.quads(f, 2);
+    const Eigen::Vector3d middle = (positions.row(surface.quads(f, 1)) + positions.row(surface.quads(f, 3))).transpose() / 2;
+    const Eigen::Vector3d apex_position = positions.row(apex).transpose();
+    positions.row(apex) = (middle + 0.3 * (middle - apex_position)).transpose();
+    const MeshValidity broken = check_mesh_validity(positions, surface.quads, field);
+    ASSERT_EQ(broken.folded, (std::vector<std::int32_t>{std::int32_t(f)}));
+    ASSERT_EQ(broken.intersecting_pairs, 0);
+    const ValidityRepairOptions options;
+    const ValidityRepairResult r = repair_validity(surface, field, RegularizationWeights{}, positions, options);
+    EXPECT_TRUE(r.report.after.valid());
+    const double apex_factor = r.alpha_factors[apex];
+    EXPECT_GE(apex_factor, options.alpha_start);
+    for (const int k : {0, 1, 3})
+        EXPECT_LE(r.alpha_factors[surface.quads(f, k)], apex_factor / options.alpha_grade) << "corner " << k;
+}
+
 TEST(ValidityRepair, TheResultMinimizesTheRepairedEnergyOverTheRegionAndNothingElseMoves) {
     const TiltedCap& c = tilted_cap();
     const ValidityRepairResult& r = tilted_cap_repair();

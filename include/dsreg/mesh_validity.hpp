@@ -28,6 +28,7 @@
 // indices, so adjacency is exactly "shares an index" above. All positions in any units.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -75,5 +76,12 @@ MeshValidity check_mesh_validity(const PointMatrix& vertices, const FaceMatrix& 
 /// that face's row of `field`, degenerate triangles included. Sorted.
 std::vector<std::int32_t> faces_folded_against_field(const PointMatrix& vertices, const FaceMatrix& faces,
                                                      const PointMatrix& field);
+
+/// The corners at which quad (q0, q1, q2, q3) is folded against u (3 above): corner k when the
+/// triangle (q_{k−1}, q_k, q_{k+1}) has n·u ≤ 0, i.e. q_k lies on the wrong side of the diagonal
+/// between its two neighbours (or on it). A quad folded along one diagonal only has one or two
+/// such corners, the apexes of its turned triangles; a quad turned over has all four; a quad
+/// with none is not folded.
+std::array<bool, 4> folded_corners(const std::array<Eigen::Vector3d, 4>& quad, const Eigen::Vector3d& u);
 
 }  // namespace dsreg

@@ -17,7 +17,11 @@
 //    faces. The targets form a valid mesh (tested on random volumes, both connectivities).
 //  * E' = E + Σ_i (m_i − 1) α α_i w0_i |x_i − t_i|² (eq. 1 and its weights; m_i = 1 at first).
 //  * Round k: the mesh x is checked (check_mesh_validity with the field, incrementally: only the
-//    triangles that moved and those near them are tested again). Each vertex of an invalid face
+//    triangles that moved and those near them are tested again). The invalid vertices are the
+//    corners of the intersecting (or degenerate) faces and, of a folded quad, the apex of each
+//    corner triangle turned against u — the vertex that lies on the wrong side of the diagonal
+//    between its two neighbours; its target, a corner of the digital square, lies on the right
+//    side — or all four corners once those apexes are held. Each invalid vertex
 //    gets m_i ← max(m_i·`alpha_step`, `alpha_start`), or, once m_i reached `alpha_cap`, is held
 //    at its target; the `grade_rings` rings around get at least m_i / `alpha_grade` per ring, so
 //    that the pulled vertices join the rest smoothly (pulling single vertices makes their
@@ -68,7 +72,7 @@ struct ValidityRepairOptions {
     int window_rings = 4;      ///< each round re-solves the region within this many rings of them
     double split_offset = 0.1;  ///< voxels: the targets of the copies of a split pointel move apart
     double field_margin = 0.2;  ///< corrected faces get u·n_s = this (about 78° from n_s at most)
-    int max_rounds = 40;
+    int max_rounds = 100;       ///< the rounds of the tail fix a few faces each and cost little (lobster.vol: 36)
     BoxQpOptions qp;            ///< KKT tolerance of the solves in the reversible mode
     /// Reversible mode: the clamp half-width (voxels, < ½); every local solve keeps the clamp boxes.
     std::optional<double> clamp_half_width;

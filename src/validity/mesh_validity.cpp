@@ -66,6 +66,16 @@ std::vector<std::int32_t> faces_folded_against_field(const PointMatrix& vertices
     return folded;
 }
 
+std::array<bool, 4> folded_corners(const std::array<Eigen::Vector3d, 4>& quad, const Eigen::Vector3d& u) {
+    std::array<bool, 4> folded{};
+    for (int k = 0; k < 4; ++k) {
+        const Eigen::Vector3d& previous = quad[std::size_t((k + 3) % 4)];
+        const Eigen::Vector3d to_corner = quad[std::size_t(k)] - previous, to_next = quad[std::size_t((k + 1) % 4)] - previous;
+        folded[std::size_t(k)] = !(to_corner.cross(to_next).dot(u) > 0);
+    }
+    return folded;
+}
+
 MeshValidity check_mesh_validity(const PointMatrix& vertices, const FaceMatrix& faces, const PointMatrix& field) {
     const auto started = std::chrono::steady_clock::now();
     MeshValidity validity;

@@ -71,16 +71,6 @@ private:
     std::vector<std::int64_t> parent_;
 };
 
-std::vector<std::int32_t> unique_vertices_of(const FaceMatrix& quads, const std::vector<std::int32_t>& faces) {
-    std::vector<std::int32_t> vertices;
-    vertices.reserve(4 * faces.size());
-    for (const std::int32_t f : faces)
-        for (int k = 0; k < 4; ++k) vertices.push_back(quads(f, k));
-    std::sort(vertices.begin(), vertices.end());
-    vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
-    return vertices;
-}
-
 /// The neighbours of each vertex across every edge of the mesh, both ways, in increasing order.
 /// On a closed manifold (any binary volume) these are the quad links; on a label complex they
 /// also give a junction vertex its neighbours in the sheets, which the junction-aware fairness
@@ -163,7 +153,7 @@ public:
         const auto started = Clock::now();
         moved_ = &moved;
         refield = correct_field(validity.folded, report);
-        const std::vector<std::int32_t> invalid = unique_vertices_of(surface_.quads, validity.invalid_faces());
+        const std::vector<std::int32_t> invalid = vertices_to_strengthen(validity);
         const std::vector<std::int32_t> strengthened = strengthen(invalid);
         for (const std::int32_t v : rings_around(neighbours_, strengthened, o_.region_rings, mark_, [](std::int32_t) { return true; }))
             in_region_[std::size_t(v)] = 1;
@@ -252,6 +242,37 @@ private:
             ++report.field_corrections;
         }
         return corrected;
+    }
+
+    /// The vertices whose data term a round strengthens: every corner of an intersecting or
+    /// degenerate face; of a folded face, the apex of each corner triangle turned against u (the
+    /// vertex on the wrong side of the diagonal between its two neighbours in the quad, whose
+    /// target, a corner of the digital square, is on the right side), or every corner once those
+    /// apexes are all held. Sorted, each once.
+    std::vector<std::int32_t> vertices_to_strengthen(const MeshValidity& validity) const {
+        std::vector<std::int32_t> vertices;
+        for (const std::int32_t f : validity.intersecting_faces)
+            for (int k = 0; k < 4; ++k) vertices.push_back(surface_.quads(f, k));
+        for (const std::int32_t f : validity.folded) {
+            std::array<Eigen::Vector3d, 4> quad;
+            for (int k = 0; k < 4; ++k) quad[std::size_t(k)] = x_.segment<3>(3 * Eigen::Index(surface_.quads(f, k)));
+            const std::array<bool, 4> folded = folded_corners(quad, field_.row(f).transpose());
+            const std::size_t first = vertices.size();
+            bool all_held = true;
+            for (int k = 0; k < 4; ++k) {
+                if (!folded[std::size_t(k)]) continue;
+                vertices.push_back(surface_.quads(f, k));
+                all_held = all_held && held_[std::size_t(surface_.quads(f, k))];
+            }
+            // All four when the apexes are held already, or when none is found (the check's
+            // triangles, based at another corner, may round a nearly flat corner the other way):
+            // so every folded face strengthens something, and the repair still ends valid.
+            if (vertices.size() == first || all_held)
+                for (int k = 0; k < 4; ++k) vertices.push_back(surface_.quads(f, k));
+        }
+        std::sort(vertices.begin(), vertices.end());
+        vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+        return vertices;
     }
 
     /// One step up for each invalid vertex: m_i × alpha_step (at least alpha_start), or held at
