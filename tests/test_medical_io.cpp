@@ -328,6 +328,56 @@ TEST(MedicalIo, MetaImageWithoutItsDataFileIsRejected) {
     expect_error([&] { read_volume(scratch.path("bomb.mha")); }, scratch.path("bomb.mha"), "truncated or lying header");
 }
 
+/// The byte offset of the value of `tag` in the `directory`-th IFD (0-based) of a little-endian
+/// TIFF, whose entry holds one short or long value; npos when absent.
+std::size_t tiff_tag_value_offset(const std::string& bytes, int directory, std::uint16_t tag) {
+    const auto u16 = [&](std::size_t at) { return std::uint16_t(std::uint8_t(bytes[at]) | std::uint8_t(bytes[at + 1]) << 8); };
+    const auto u32 = [&](std::size_t at) { return std::uint32_t(u16(at)) | std::uint32_t(u16(at + 2)) << 16; };
+    if (bytes.compare(0, 4, std::string("II*\0", 4)) != 0) return std::string::npos;
+    std::size_t ifd = u32(4);
+    for (int d = 0; d < directory && ifd != 0; ++d) ifd = u32(ifd + 2 + 12 * std::size_t(u16(ifd)));
+    if (ifd == 0) return std::string::npos;
+    for (std::size_t e = 0; e < u16(ifd); ++e)
+        if (u16(ifd + 2 + 12 * e) == tag) return ifd + 2 + 12 * e + 8;
+    return std::string::npos;
+}
+
+TEST(MedicalIo, TiffStackWhosePagesDifferIsRefusedBeforeItkReadsIt) {
+    // ITK's TIFF reader sizes the stack from the first page and the pages' subfile types, then
+    // decodes every directory as it comes: a second directory that lost its "page" subfile type
+    // made it write one slice past its buffer (heap overflow, found by mutating a stack).
+    ScratchFolder scratch("medical-tiff-pages");
+    const VoxelGrid grid = test::oblique_grid({8, 7, 4});
+    const std::vector<double> labels = test::sample_ellipsoid(grid, test::test_ellipsoid(grid), 3);
+    const std::string good = scratch.path("good.tif");
+    write_image(good, grid, labels, RawVoxelType::UInt8);
+    ASSERT_NO_THROW(read_volume(good));
+    const std::string bytes = read_bytes(good);
+    const struct {
+        const char* name;
+        std::uint16_t tag;
+        char value;
+        const char* says;
+    } cases[] = {{"subfile.tif", 254, char(0xf4), "subfile type 244"}, {"bits.tif", 258, 16, "1 x 16 bits per pixel"}};
+    for (const auto& c : cases) {
+        SCOPED_TRACE(c.name);
+        const std::size_t at = tiff_tag_value_offset(bytes, 1, c.tag);
+        ASSERT_NE(at, std::string::npos) << "ITK's writer no longer writes tag " << c.tag;
+        std::string changed = bytes;
+        changed[at] = c.value;
+        const std::string path = scratch.path(c.name);
+        write_bytes(path, changed);
+        try {
+            read_volume(path);
+            ADD_FAILURE() << "accepted";
+        } catch (const Error& error) {
+            const std::string message = error.what();
+            EXPECT_EQ(message.rfind(path + ": page 2 is ", 0), 0u) << message;
+            EXPECT_NE(message.find(c.says), std::string::npos) << message;
+        }
+    }
+}
+
 TEST(MedicalIo, MalformedHeadersGetMessagesNamingTheFile) {
     ScratchFolder scratch("medical-malformed");
     const std::vector<std::pair<std::string, std::string>> files = {

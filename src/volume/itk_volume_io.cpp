@@ -68,6 +68,7 @@ std::pair<std::int64_t, std::int64_t> needed_slices(const VoxelDestination& dest
 
 void read_itk_voxels(const std::string& path, ItkFormat format, const VolumeLimits& limits, VoxelDestination& destination) {
     { const InputFile check(path); }  // a clear message for a missing file, a folder, a device
+    if (format == ItkFormat::Tiff) check_tiff_pages(path);
     ItkImageReader reader(path, format);
     const ImageHeader& header = reader.header();
     if (!prepare_destination(path, header, {path}, limits, destination)) return;

@@ -306,6 +306,10 @@ void read_npy_voxels(const std::string& path, const VolumeLimits& limits, VoxelD
 // Images ITK decodes (itk_volume_io.cpp): header checks, then the voxels in slabs of slices when
 // ITK can stream the format, else in one piece; a DICOM series slab by slab.
 void read_itk_voxels(const std::string& path, ItkFormat format, const VolumeLimits& limits, VoxelDestination& destination);
+/// Throws (naming the file and the page) unless every directory of the TIFF stack `path` has the
+/// size, the bits and samples per pixel, the sample format, the planar layout and the subfile
+/// type of the first: ITK's reader assumes so (tiff_pages.cpp).
+void check_tiff_pages(const std::string& path);
 void read_dicom_series_voxels(const std::string& folder, const VolumeLimits& limits, VoxelDestination& destination);
 
 /// Every format dsreg reads, told from the file name (compound extensions such as .nii.gz

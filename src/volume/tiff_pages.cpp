@@ -1,0 +1,74 @@
+// dsreg — the pages of a multi-page TIFF, checked with libtiff before ITK reads them.
+//
+// ITK's TIFF reader (5.2) takes the size and the value type of the whole stack from the first
+// page and the number of slices from the directories' subfile types, then decodes every
+// directory as it comes: a stack whose second directory lost its "page" subfile type (one
+// mutated byte) had one slice less allocated than written, a heap overflow that aborted at exit
+// (found by mutating a small stack). So every directory must be a page described like the first.
+#include <tiffio.h>
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "volume_io_internal.hpp"
+
+namespace dsreg::volume_io_detail {
+
+namespace {
+
+/// How a page stores its pixels (what ITK assumes the same for every page).
+struct TiffPage {
+    std::uint32_t width = 0, height = 0;
+    std::uint16_t bits_per_sample = 0, samples_per_pixel = 0, sample_format = 0, planar_config = 0;
+    std::uint32_t subfile_type = 0;
+
+    bool operator==(const TiffPage& o) const {
+        return width == o.width && height == o.height && bits_per_sample == o.bits_per_sample &&
+               samples_per_pixel == o.samples_per_pixel && sample_format == o.sample_format &&
+               planar_config == o.planar_config && subfile_type == o.subfile_type;
+    }
+    std::string text() const {
+        return std::to_string(width) + "x" + std::to_string(height) + ", " + std::to_string(samples_per_pixel) + " x " +
+               std::to_string(bits_per_sample) + " bits per pixel, sample format " + std::to_string(sample_format) +
+               ", planar configuration " + std::to_string(planar_config) + ", subfile type " + std::to_string(subfile_type);
+    }
+};
+
+TiffPage current_page(TIFF* tiff) {
+    TiffPage page;
+    TIFFGetField(tiff, TIFFTAG_IMAGEWIDTH, &page.width);
+    TIFFGetField(tiff, TIFFTAG_IMAGELENGTH, &page.height);
+    TIFFGetFieldDefaulted(tiff, TIFFTAG_BITSPERSAMPLE, &page.bits_per_sample);
+    TIFFGetFieldDefaulted(tiff, TIFFTAG_SAMPLESPERPIXEL, &page.samples_per_pixel);
+    TIFFGetFieldDefaulted(tiff, TIFFTAG_SAMPLEFORMAT, &page.sample_format);
+    TIFFGetFieldDefaulted(tiff, TIFFTAG_PLANARCONFIG, &page.planar_config);
+    TIFFGetField(tiff, TIFFTAG_SUBFILETYPE, &page.subfile_type);
+    return page;
+}
+
+struct TiffCloser {
+    void operator()(TIFF* tiff) const { TIFFClose(tiff); }
+};
+
+}  // namespace
+
+void check_tiff_pages(const std::string& path) {
+    static std::once_flag quiet;  // libtiff prints its errors and warnings by default; ours name the file
+    std::call_once(quiet, [] {
+        TIFFSetErrorHandler(nullptr);
+        TIFFSetWarningHandler(nullptr);
+    });
+    const std::unique_ptr<TIFF, TiffCloser> tiff(TIFFOpen(path.c_str(), "rm"));
+    if (!tiff) fail(path, "not a TIFF file that libtiff can open");
+    const TiffPage first = current_page(tiff.get());
+    for (std::int64_t index = 2; TIFFReadDirectory(tiff.get()); ++index) {
+        const TiffPage page = current_page(tiff.get());
+        if (!(page == first))
+            fail(path, "page " + std::to_string(index) + " is " + page.text() + ", page 1 " + first.text() +
+                           " (dsreg reads stacks whose directories are all pages alike)");
+    }
+}
+
+}  // namespace dsreg::volume_io_detail
