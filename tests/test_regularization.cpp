@@ -1,6 +1,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <omp.h>
+
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -183,6 +186,36 @@ TEST(Regularization, GradientVanishesAtTheSolutionForEverySolver) {
                       e_star);
         if (reference.size() == 0) reference = r.positions;
         EXPECT_LT((r.positions - reference).rowwise().norm().maxCoeff(), 1e-4) << name << " disagrees with cholmod (1e-4 voxel)";
+    }
+}
+
+TEST(Regularization, EnergyAndRightHandSideAreTheSameBitsAtEveryThreadCount) {
+    // A ball of some 20 000 vertices and faces (the sums run in blocks of 4 096 terms, in parallel):
+    // the energy terms and the constant of E are summed in an order fixed by the mesh, so 1 to 4
+    // threads give the same bits (an OpenMP reduction adds the threads' partial sums in the order
+    // they finish, over ranges that depend on the thread count).
+    const auto ball = test::make_ball(84, 40, 41.5);
+    const DigitalSurface s = extract_digital_surface(ball, Connectivity::Six);
+    ASSERT_GT(s.vertex_count(), 4 * 4096);
+    const VertexLinks links = vertex_links(s.quads, s.vertex_count());
+    const PointMatrix u = trivial_normals(s), q = jitter(s.vertices, 0.3, 7);
+    RegularizationWeights w;
+    w.vertex_alpha = Eigen::VectorXd::LinSpaced(s.vertex_count(), 0.5, 3.0);
+    const int threads = omp_get_max_threads();
+    std::vector<EnergyTerms> energies;
+    std::vector<double> constants;
+    for (int t = 1; t <= 4; ++t) {
+        omp_set_num_threads(t);
+        energies.push_back(regularization_energy(q, s.vertices, s.quads, links, u, w));
+        constants.push_back(regularization_right_hand_side(q, w).constant);
+    }
+    omp_set_num_threads(threads);
+    for (std::size_t k = 1; k < energies.size(); ++k) {
+        SCOPED_TRACE(std::to_string(k + 1) + " threads");
+        EXPECT_EQ(energies[k].data, energies[0].data);
+        EXPECT_EQ(energies[k].fairness, energies[0].fairness);
+        EXPECT_EQ(energies[k].alignment, energies[0].alignment);
+        EXPECT_EQ(constants[k], constants[0]);
     }
 }
 

@@ -1,10 +1,14 @@
 // The repair of the regularized mesh (validity_repair.hpp): its targets are valid, a constructed
 // fold comes out valid, the result is the exact minimizer of the repaired energy over the region
 // and nothing else moves, the repair stops as soon as the mesh is valid; noisy random blobs, the
-// reversible mode and the real volumes of ../shared/data come out valid.
+// reversible mode and the real volumes of ../shared/data come out valid; the mesh is the same bits
+// whatever the load average and the BLAS's thread count left by earlier code.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <dlfcn.h>
+#include <omp.h>
+
 #include <cmath>
 #include <filesystem>
 #include <random>
@@ -22,6 +26,25 @@
 #ifndef DSREG_SHARED_DATA_DIR
 #define DSREG_SHARED_DATA_DIR "../shared/data"
 #endif
+
+namespace {
+/// The 1-minute load average that dsreg reads in this test binary while it is set (≥ 0): see
+/// ValidityRepair.TheMeshIsTheSameWhateverTheLoadAndTheBlasThreads.
+double simulated_load = -1;
+}  // namespace
+
+/// getloadavg for this test binary: the simulated load while one is set, the system's otherwise.
+/// (dsreg once chose CHOLMOD's BLAS threads from the load average, so a run on a busy machine
+/// gave another mesh than on an idle one; it must not read it again.)
+extern "C" int getloadavg(double loadavg[], int nelem) noexcept {
+    if (simulated_load >= 0) {
+        for (int k = 0; k < nelem; ++k) loadavg[k] = simulated_load;
+        return nelem;
+    }
+    using Real = int (*)(double[], int);
+    static const Real real = reinterpret_cast<Real>(dlsym(RTLD_NEXT, "getloadavg"));
+    return real ? real(loadavg, nelem) : -1;
+}
 
 namespace dsreg {
 namespace {
@@ -66,11 +89,12 @@ const ValidityRepairResult& tilted_cap_repair() {
     return r;
 }
 
-/// A blob: the union of a few random balls in a 24³ grid, each surface voxel flipped with
+/// A blob: the union of a few random balls in a size³ grid, each surface voxel flipped with
 /// probability 0.15 (noise).
-BinaryVolume noisy_blob(unsigned seed) {
+BinaryVolume noisy_blob(unsigned seed, std::int64_t size = 24) {
     std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> centre(7, 16), radius(3, 6);
+    const double scale = double(size) / 24;
+    std::uniform_real_distribution<double> centre(7 * scale, 16 * scale), radius(3 * scale, 6 * scale);
     std::vector<Eigen::Vector4d> balls;
     for (int b = 0; b < 4; ++b) balls.emplace_back(centre(rng), centre(rng), centre(rng), radius(rng));
     const auto inside = [&](double x, double y, double z) {
@@ -78,12 +102,12 @@ BinaryVolume noisy_blob(unsigned seed) {
             if (Eigen::Vector3d(x - ball[0], y - ball[1], z - ball[2]).norm() <= ball[3]) return true;
         return false;
     };
-    BinaryVolume volume = test::make_volume({24, 24, 24}, inside);
+    BinaryVolume volume = test::make_volume({size, size, size}, inside);
     std::bernoulli_distribution flip(0.15);
     BinaryVolume noisy = volume;
-    for (std::int64_t k = 1; k + 1 < 24; ++k)
-        for (std::int64_t j = 1; j + 1 < 24; ++j)
-            for (std::int64_t i = 1; i + 1 < 24; ++i) {
+    for (std::int64_t k = 1; k + 1 < size; ++k)
+        for (std::int64_t j = 1; j + 1 < size; ++j)
+            for (std::int64_t i = 1; i + 1 < size; ++i) {
                 bool boundary = false;
                 for (int d = 0; d < 3; ++d)
                     for (int s : {-1, 1}) {
@@ -285,6 +309,40 @@ TEST(ValidityRepair, TheReversibleModeStaysReversible) {
     const Eigen::VectorXd x = flatten_points(r.positions);
     EXPECT_TRUE((x.array() >= lower.array()).all() && (x.array() <= upper.array()).all());
     EXPECT_EQ(classify_voxel_centres(volume, r.positions, s.quads).wrong(), 0);
+}
+
+TEST(ValidityRepair, TheMeshIsTheSameWhateverTheLoadAndTheBlasThreads) {
+    // The default pipeline on a volume that folds, three times at two threads: the machine idle
+    // (load 0), busy (load 10), idle again, and OpenBLAS left by earlier code at one thread or at
+    // two. The mesh (regularized and repaired) and the repair's course must be the same bits: a
+    // result may depend on the thread count, never on the load or on the state of the BLAS.
+    using SetThreads = void (*)(int);
+    const auto set_blas_threads = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
+    const int threads = omp_get_max_threads();
+    omp_set_num_threads(2);
+    LoadedVolume loaded;
+    loaded.volume = noisy_blob(0, 48);
+    loaded.description = "blob";
+    const PipelineOptions options;  // defaults: II normals, paper weights, auto solver, repair
+    std::vector<PipelineResult> runs;
+    for (const auto& [load, blas] : {std::pair{0.0, 2}, std::pair{10.0, 1}, std::pair{0.0, 1}}) {
+        simulated_load = load;
+        if (set_blas_threads) set_blas_threads(blas);
+        runs.push_back(run_pipeline(loaded, options));
+    }
+    simulated_load = -1;
+    omp_set_num_threads(threads);
+    ASSERT_TRUE(runs[0].validity.has_value());
+    EXPECT_FALSE(runs[0].validity->before.valid());  // there is a repair to compare
+    for (std::size_t k = 1; k < runs.size(); ++k) {
+        SCOPED_TRACE("run " + std::to_string(k));
+        ASSERT_TRUE(runs[k].validity.has_value());
+        EXPECT_EQ(runs[k].validity->rounds, runs[0].validity->rounds);
+        EXPECT_EQ(runs[k].validity->parts_solved, runs[0].validity->parts_solved);
+        EXPECT_TRUE(runs[k].regularization.positions == runs[0].regularization.positions)
+            << "largest difference " << (runs[k].regularization.positions - runs[0].regularization.positions).cwiseAbs().maxCoeff();
+        EXPECT_TRUE(runs[k].field.normals == runs[0].field.normals);
+    }
 }
 
 TEST(ValidityRepair, RejectsInconsistentInput) {

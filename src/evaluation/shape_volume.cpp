@@ -195,12 +195,16 @@ double shape_volume(const ImplicitShape& shape, int cells_per_axis) {
     };
     // Outer integral over z, cut into cells_per_axis cells integrated in parallel.
     const double dz = size.z() / cells_per_axis;
-    double volume = 0;
-#pragma omp parallel for schedule(dynamic, 1) reduction(+ : volume)
+    // The cells' integrals added in cell order (a reduction would add them in the order the
+    // threads finish: other bits from run to run).
+    std::vector<double> cell_volume(static_cast<std::size_t>(cells_per_axis), 0.0);
+#pragma omp parallel for schedule(dynamic, 1)
     for (int k = 0; k < cells_per_axis; ++k) {
         const double z0 = shape.lower.z() + k * dz, z1 = k + 1 == cells_per_axis ? shape.upper.z() : z0 + dz;
-        volume += adaptive_simpson(cross_section_area, z0, z1, tolerance / cells_per_axis, 1, max_areas_per_cell);
+        cell_volume[std::size_t(k)] = adaptive_simpson(cross_section_area, z0, z1, tolerance / cells_per_axis, 1, max_areas_per_cell);
     }
+    double volume = 0;
+    for (const double v : cell_volume) volume += v;
     return volume;
 }
 

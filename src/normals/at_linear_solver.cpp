@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "../regularization/blas_threads.hpp"
 #include "dsreg/error.hpp"
 
 namespace dsreg::at_detail {
@@ -83,6 +84,7 @@ void CholeskyFactor::factorize(const Eigen::SparseMatrix<double>& lower) {
     analyse(lower);
     cholmod_sparse A = lower_view(lower);
     factorized_ = false;
+    detail::use_blas_threads();
     cholmod_factorize(&A, factor_, &common_);
     if (common_.status != CHOLMOD_OK || factor_->minor != factor_->n)
         throw Error("Ambrosio-Tortorelli: CHOLMOD could not factor the " + name_ + "-matrix (not positive definite)");

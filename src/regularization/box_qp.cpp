@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "blas_threads.hpp"
 #include "conjugate_gradient.hpp"
 #include "dsreg/error.hpp"
 #include "held_solver.hpp"
@@ -97,6 +98,7 @@ public:
     explicit PatternFactorizer(const SparseMatrix& R) : R_(R), diagonal_(R.diagonal()) {
         R_.makeCompressed();
         work_ = R_;
+        detail::use_blas_threads();
         cholesky_.analyzePattern(R_);
         if (cholesky_.info() != Eigen::Success) throw Error("box QP: CHOLMOD could not analyze the matrix");
     }
@@ -136,6 +138,7 @@ public:
 
 private:
     void factorize(const SparseMatrix& matrix, const std::string& what) {
+        detail::use_blas_threads();
         cholesky_.factorize(matrix);
         ++factorizations_;
         if (cholesky_.info() != Eigen::Success) throw Error("box QP: CHOLMOD could not factor " + what + " (not positive definite)");

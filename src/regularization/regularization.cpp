@@ -2,11 +2,13 @@
 
 #include <Eigen/SparseCore>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
 #include <vector>
 
+#include "../common/ordered_sum.hpp"
 #include "block_sparse.hpp"
 #include "dsreg/error.hpp"
 #include "regularization_operator.hpp"
@@ -16,6 +18,7 @@ namespace dsreg {
 using detail::alignment_weight;
 using detail::data_weight;
 using detail::fairness_weight;
+using detail::ordered_sums;
 
 namespace {
 
@@ -64,14 +67,11 @@ RegularizationSystem regularization_right_hand_side(const PointMatrix& positions
     const std::int64_t n = positions.rows();
     RegularizationSystem system;
     system.rhs.resize(3 * n);
-    double constant = 0;
-#pragma omp parallel for schedule(static) reduction(+ : constant) if (n >= 4096)
-    for (std::int64_t i = 0; i < n; ++i) {
+    system.constant = ordered_sums<1>(n, [&](std::int64_t i, std::array<double, 1>& constant) {
         const double aw = weights.alpha * data_weight(weights, i);
         for (int d = 0; d < 3; ++d) system.rhs[3 * i + d] = aw * positions(i, d);
-        constant += aw * positions.row(i).squaredNorm();
-    }
-    system.constant = constant;
+        constant[0] += aw * positions.row(i).squaredNorm();
+    })[0];
     return system;
 }
 
@@ -92,31 +92,29 @@ EnergyTerms regularization_energy(const PointMatrix& candidate, const PointMatri
                                   const VertexLinks& links, const PointMatrix& normals, const RegularizationWeights& weights) {
     const std::int64_t n = positions.rows();
     validate_weights(weights, n, quads.rows());
-    double data = 0, fairness = 0, alignment = 0;
-#pragma omp parallel for schedule(static) reduction(+ : data, fairness) if (n >= 4096)
-    for (std::int64_t i = 0; i < n; ++i) {
-        data += data_weight(weights, i) * (candidate.row(i) - positions.row(i)).squaredNorm();
+    // Summed in an order fixed by the mesh alone (ordered_sum.hpp): the same bits at any thread count.
+    const std::array<double, 2> vertex_terms = ordered_sums<2>(n, [&](std::int64_t i, std::array<double, 2>& sums) {
+        sums[0] += data_weight(weights, i) * (candidate.row(i) - positions.row(i)).squaredNorm();
         Eigen::RowVector3d barycenter = Eigen::RowVector3d::Zero();
         for (std::int64_t q = links.offsets[std::size_t(i)]; q < links.offsets[std::size_t(i + 1)]; ++q)
             barycenter += candidate.row(links.neighbors[std::size_t(q)]);
         if (links.size(i) > 0) barycenter /= double(links.size(i));
         else barycenter = candidate.row(i);
-        fairness += fairness_weight(weights, i) * (candidate.row(i) - barycenter).squaredNorm();
-    }
-    const Eigen::Index k = quads.cols(), m = quads.rows();
-#pragma omp parallel for schedule(static) reduction(+ : alignment) if (m >= 4096)
-    for (Eigen::Index f = 0; f < m; ++f) {
+        sums[1] += fairness_weight(weights, i) * (candidate.row(i) - barycenter).squaredNorm();
+    });
+    const Eigen::Index k = quads.cols();
+    const std::array<double, 1> face_terms = ordered_sums<1>(quads.rows(), [&](std::int64_t f, std::array<double, 1>& sums) {
         double sum = 0;
         for (Eigen::Index e = 0; e < k; ++e) {
             const double d = (candidate.row(quads(f, e)) - candidate.row(quads(f, (e + 1) % k))).dot(normals.row(f));
             sum += d * d;
         }
-        alignment += alignment_weight(weights, f) * sum;
-    }
+        sums[0] += alignment_weight(weights, f) * sum;
+    });
     EnergyTerms terms;
-    terms.data = data;
-    terms.fairness = fairness;
-    terms.alignment = alignment;
+    terms.data = vertex_terms[0];
+    terms.fairness = vertex_terms[1];
+    terms.alignment = face_terms[0];
     return terms;
 }
 

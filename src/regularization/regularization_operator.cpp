@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
+#include "../common/ordered_sum.hpp"
 #include "block_sparse.hpp"
 #include "dsreg/error.hpp"
 
@@ -157,24 +159,31 @@ void RegularizationOperator::row(std::int64_t j, Row& s, bool values) const {
 RegularizationOperator::Summary RegularizationOperator::summary() const {
     Summary summary;
     summary.diagonal.resize(std::size_t(n_));
-    double largest = 0, trace = 0, nonzeros = 0;
+    // The maximum is exact in any order, the counts are whole numbers; the trace is summed in an
+    // order fixed by the mesh (ordered_sum.hpp): the same bits at any thread count.
+    const std::int64_t blocks = sum_blocks(n_);
+    std::vector<double> block_trace(static_cast<std::size_t>(blocks), 0.0);
+    double largest = 0, nonzeros = 0;
 #pragma omp parallel if (n_ >= kParallelMinRows)
     {
         Row s(n_);
-#pragma omp for schedule(static) reduction(max : largest) reduction(+ : trace, nonzeros)
-        for (std::int64_t j = 0; j < n_; ++j) {
-            row(j, s, true);
-            Eigen::Vector3d sums = Eigen::Vector3d::Zero();
-            for (std::size_t q = 0; q < s.columns.size(); ++q) {
-                nonzeros += s.full[q] ? 9 : 3;
-                if (s.full[q]) sums += s.blocks[q].cwiseAbs().rowwise().sum();
-                else sums += s.blocks[q].diagonal().cwiseAbs();
-                if (s.columns[q] == j) summary.diagonal[std::size_t(j)] = s.blocks[q];
+#pragma omp for schedule(static) reduction(max : largest) reduction(+ : nonzeros)
+        for (std::int64_t b = 0; b < blocks; ++b)
+            for (std::int64_t j = block_first(b); j < block_last(b, n_); ++j) {
+                row(j, s, true);
+                Eigen::Vector3d sums = Eigen::Vector3d::Zero();
+                for (std::size_t q = 0; q < s.columns.size(); ++q) {
+                    nonzeros += s.full[q] ? 9 : 3;
+                    if (s.full[q]) sums += s.blocks[q].cwiseAbs().rowwise().sum();
+                    else sums += s.blocks[q].diagonal().cwiseAbs();
+                    if (s.columns[q] == j) summary.diagonal[std::size_t(j)] = s.blocks[q];
+                }
+                largest = std::max(largest, sums.maxCoeff());
+                block_trace[std::size_t(b)] += summary.diagonal[std::size_t(j)].trace();
             }
-            largest = std::max(largest, sums.maxCoeff());
-            trace += summary.diagonal[std::size_t(j)].trace();
-        }
     }
+    double trace = 0;
+    for (const double t : block_trace) trace += t;
     summary.infinity_norm = largest;
     summary.scalar_nonzeros = nonzeros;
     summary.mean_diagonal = n_ > 0 ? trace / double(3 * n_) : 0.0;

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 
+#include "blas_threads.hpp"
 #include "dsreg/error.hpp"
 #include "regularization_operator.hpp"
 
@@ -356,6 +357,7 @@ SmoothedAggregation<Scalar>::SmoothedAggregation(Matrix filtered_fine, double fi
 template <class Scalar>
 void SmoothedAggregation<Scalar>::factor_coarsest(const Eigen::SparseMatrix<double>& matrix) {
     coarsest_ = std::make_unique<Coarsest>();
+    use_blas_threads();
     coarsest_->cholesky.compute(matrix);
     if (coarsest_->cholesky.info() != Eigen::Success)
         throw Error("algebraic multigrid: the coarsest level is not positive definite (alpha must be > 0)");

@@ -2,14 +2,12 @@
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/Dense>
-#include <dlfcn.h>
 
 #include <algorithm>
 #include <cstdio>
-#include <cstdlib>
-#include <thread>
 #include <limits>
 
+#include "blas_threads.hpp"
 #include "conjugate_gradient.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/progress.hpp"
@@ -34,26 +32,8 @@ std::string format_number(const char* format, double value) {
     return text;
 }
 
-/// CHOLMOD's supernodal factorization runs its dense blocks through BLAS (OpenBLAS, pthreads). By
-/// default OpenBLAS uses every core, and its threads spin while they wait: on cores shared with
-/// other processes that multiplies the wall time (goursat h = 0.25 at load 10 on 2 cores: 30 s
-/// with 2 threads, 10.6 s with 1). Unless the user chose a thread count (OPENBLAS_NUM_THREADS,
-/// GOTO_NUM_THREADS, OMP_NUM_THREADS), BLAS gets all cores when the 1-minute load average leaves
-/// them free and one thread otherwise. Nothing happens if the BLAS is not OpenBLAS.
-void choose_blas_threads() {
-    for (const char* name : {"OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS"})
-        if (std::getenv(name)) return;
-    using SetThreads = void (*)(int);
-    const auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
-    if (!set) return;
-    const int cores = int(std::max(1u, std::thread::hardware_concurrency()));
-    double load[1] = {0};
-    const bool busy = getloadavg(load, 1) == 1 && load[0] > cores - 0.5;  // (this process counts for about 1)
-    set(busy ? 1 : cores);
-}
-
 SolveReport solve_cholmod(const detail::SpdSystem& system, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
-    choose_blas_threads();
+    detail::use_blas_threads();
     const Eigen::SparseMatrix<double>& R = system.matrix();
     Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
     llt.compute(R);

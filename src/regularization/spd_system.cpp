@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <limits>
+#include <vector>
 
+#include "../common/ordered_sum.hpp"
 #include "conjugate_gradient.hpp"
 
 namespace dsreg::detail {
@@ -17,17 +19,23 @@ void AssembledSystem::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) con
 /// whole diagonal: the smaller it is, the more ill-conditioned R (and the slower any CG).
 double AssembledSystem::data_weight_ratio() const {
     const ScalarRows rows = row_view(R_);
-    double smallest = std::numeric_limits<double>::infinity(), diagonal = 0;
-#pragma omp parallel for schedule(static) reduction(min : smallest) reduction(+ : diagonal)
-    for (Eigen::Index i = 0; i < rows.rows(); ++i) {
-        double same_coordinate = 0;
-        for (int q = rows.outerIndexPtr()[i]; q < rows.outerIndexPtr()[i + 1]; ++q) {
-            const Eigen::Index j = rows.innerIndexPtr()[q];
-            if (j % 3 == i % 3) same_coordinate += rows.valuePtr()[q];
-            if (j == i) diagonal += rows.valuePtr()[q];
+    // The minimum is exact in any order; the trace is summed in an order fixed by R (ordered_sum.hpp).
+    const std::int64_t blocks = sum_blocks(rows.rows());
+    std::vector<double> block_diagonal(static_cast<std::size_t>(blocks), 0.0);
+    double smallest = std::numeric_limits<double>::infinity();
+#pragma omp parallel for schedule(static) reduction(min : smallest)
+    for (std::int64_t b = 0; b < blocks; ++b)
+        for (Eigen::Index i = block_first(b); i < block_last(b, rows.rows()); ++i) {
+            double same_coordinate = 0;
+            for (int q = rows.outerIndexPtr()[i]; q < rows.outerIndexPtr()[i + 1]; ++q) {
+                const Eigen::Index j = rows.innerIndexPtr()[q];
+                if (j % 3 == i % 3) same_coordinate += rows.valuePtr()[q];
+                if (j == i) block_diagonal[std::size_t(b)] += rows.valuePtr()[q];
+            }
+            smallest = std::min(smallest, same_coordinate);
         }
-        smallest = std::min(smallest, same_coordinate);
-    }
+    double diagonal = 0;
+    for (const double d : block_diagonal) diagonal += d;
     return rows.rows() > 0 && diagonal > 0 ? smallest / (diagonal / double(rows.rows())) : 0.0;
 }
 

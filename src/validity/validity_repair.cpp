@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -365,13 +366,17 @@ private:
     }
 
     /// Adds block `M` at (row vertex r, column vertex c) of E' restricted to the part's vertices
-    /// [first, last): into the part's matrix if c is in the part, else times x_c into the
-    /// right-hand side.
+    /// [first, last) (`part` sorted): into the part's matrix if c is in the part, else times x_c
+    /// into the right-hand side. Whether r is in the part is looked up in `part`, not in local_:
+    /// r may be the far corner of a corrected face, which R need not couple to the part (with
+    /// γ = 0, or where the fairness links are empty), so it may belong to another part that a
+    /// thread beside is solving and whose indices it is writing into local_. c, an edge
+    /// neighbour of r, is coupled to r by R: in r's part or in none.
     template <class Entry>
-    void add_block(std::int32_t r, std::int32_t c, const Eigen::Matrix3d& M, Entry& entry, Eigen::VectorXd& b, std::size_t first,
-                   std::size_t last) const {
+    void add_block(const std::vector<std::int32_t>& part, std::int32_t r, std::int32_t c, const Eigen::Matrix3d& M, Entry& entry,
+                   Eigen::VectorXd& b, std::size_t first, std::size_t last) const {
+        if (!std::binary_search(part.begin() + std::ptrdiff_t(first), part.begin() + std::ptrdiff_t(last), r)) return;
         const std::int32_t lr = local_[std::size_t(r)], lc = local_[std::size_t(c)];
-        if (lr < 0 || std::size_t(lr) < first || std::size_t(lr) >= last) return;
         if (lc >= 0) {
             for (int i = 0; i < 3; ++i)
                 for (int j = 0; j < 3; ++j) entry(3 * Eigen::Index(lr) + i, 3 * Eigen::Index(lc) + j, M(i, j));
@@ -390,6 +395,7 @@ private:
     void visit_part_system(const std::vector<std::int32_t>& part, Entry entry, Eigen::VectorXd& b, std::size_t first = 0,
                            std::size_t last = std::numeric_limits<std::size_t>::max()) const {
         last = std::min(last, part.size());
+        assert(std::is_sorted(part.begin(), part.end()));  // add_block looks vertices up in it
         detail::RegularizationOperator::Row& row = row_scratch_[std::size_t(omp_get_thread_num())];
         b.resize(3 * Eigen::Index(part.size()));  // kept as it is when it has the size already
         for (std::size_t k = first; k < last; ++k) {
@@ -430,10 +436,10 @@ private:
             const Eigen::Matrix3d M = weight * (u * u.transpose() - u0 * u0.transpose());
             for (int e = 0; e < 4; ++e) {
                 const std::int32_t a = surface_.quads(f, e), c = surface_.quads(f, (e + 1) % 4);
-                add_block(a, a, M, entry, b, first, last);
-                add_block(c, c, M, entry, b, first, last);
-                add_block(a, c, -M, entry, b, first, last);
-                add_block(c, a, -M, entry, b, first, last);
+                add_block(part, a, a, M, entry, b, first, last);
+                add_block(part, c, c, M, entry, b, first, last);
+                add_block(part, a, c, -M, entry, b, first, last);
+                add_block(part, c, a, -M, entry, b, first, last);
             }
         }
     }
