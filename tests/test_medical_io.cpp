@@ -378,6 +378,72 @@ TEST(MedicalIo, TiffStackWhosePagesDifferIsRefusedBeforeItkReadsIt) {
     }
 }
 
+/// Runs read_volume(path) and checks that it fails with a message that starts with the path and
+/// contains `says`.
+void expect_refused(const std::string& path, const std::string& says) {
+    try {
+        read_volume(path);
+        ADD_FAILURE() << path << " accepted";
+    } catch (const Error& error) {
+        const std::string message = error.what();
+        EXPECT_EQ(message.rfind(path + ": ", 0), 0u) << message;
+        EXPECT_NE(message.find(says), std::string::npos) << message;
+    }
+}
+
+TEST(MedicalIo, DamagedHdf5IsAnErrorNotACrash) {
+    // HDF5's C++ exceptions (not std::exception) crossed ITK's reader and ended the process in
+    // std::terminate: here the signature of the chunk index ("TREE") is damaged.
+    ScratchFolder scratch("medical-hdf5-damaged");
+    const VoxelGrid grid = test::oblique_grid({24, 20, 16});
+    const std::string path = scratch.path("a.h5");
+    write_image(path, grid, test::sample_ellipsoid(grid, test::test_ellipsoid(grid), 3), RawVoxelType::UInt8);
+    std::string bytes = read_bytes(path);
+    const std::size_t tree = bytes.rfind("TREE");
+    ASSERT_NE(tree, std::string::npos) << "ITK's HDF5 writer no longer writes a v1 B-tree";
+    bytes[tree] = 'X';
+    write_bytes(path, bytes);
+    expect_refused(path, "cannot read the HDF5 voxels");
+}
+
+TEST(MedicalIo, DicomMetaInformationThatEndsEarlyIsRefusedBeforeGdcmReadsIt) {
+    // Debian's GDCM asserts (aborts the process) where the file meta information group 0002 runs
+    // past the end of the file, names no value representation, or is all the file holds.
+    ScratchFolder scratch("medical-dicom-meta");
+    const VoxelGrid grid = test::oblique_grid({10, 9, 3});
+    write_dicom_series(scratch.folder(), grid, test::sample_ellipsoid(grid, test::test_ellipsoid(grid), 1),
+                       RawVoxelType::UInt16);
+    std::vector<std::string> slices = scratch.entries();
+    std::sort(slices.begin(), slices.end());
+    ASSERT_GE(slices.size(), 3u);
+    const std::string bytes = read_bytes(scratch.path(slices[1]));
+    ASSERT_EQ(bytes.compare(128, 4, "DICM"), 0);
+    // (0002,0000) UL 4 <group length>: the meta information ends at 132 + 12 + that length.
+    ASSERT_EQ(bytes.compare(132, 6, std::string("\x02\x00\x00\x00UL", 6)), 0);
+    std::uint32_t group_length = 0;
+    std::memcpy(&group_length, bytes.data() + 140, 4);
+    const std::size_t meta_end = 144 + group_length;
+    ASSERT_LT(meta_end, bytes.size());
+    ScratchFolder damaged("medical-dicom-meta-damaged");
+    write_bytes(damaged.path("cut-in-meta.dcm"), bytes.substr(0, meta_end - 3));
+    expect_refused(damaged.path("cut-in-meta.dcm"), "the file ends inside its DICOM meta information");
+    write_bytes(damaged.path("meta-only.dcm"), bytes.substr(0, meta_end));
+    expect_refused(damaged.path("meta-only.dcm"), "holds DICOM meta information and no data set");
+    std::string no_vr = bytes;
+    no_vr[136] = no_vr[137] = '\x01';
+    write_bytes(damaged.path("no-vr.dcm"), no_vr);
+    expect_refused(damaged.path("no-vr.dcm"), "(0002,0000) has no explicit value representation");
+    // In a series folder, GDCM reads every file: one cut file is named.
+    write_bytes(scratch.path(slices[1]), bytes.substr(0, meta_end - 3));
+    expect_refused(scratch.path(slices[1]), "the file ends inside its DICOM meta information");
+    try {
+        read_volume(scratch.folder());
+        ADD_FAILURE() << "series accepted";
+    } catch (const Error& error) {
+        EXPECT_EQ(std::string(error.what()).rfind(scratch.path(slices[1]) + ": the file ends inside", 0), 0u) << error.what();
+    }
+}
+
 TEST(MedicalIo, MalformedHeadersGetMessagesNamingTheFile) {
     ScratchFolder scratch("medical-malformed");
     const std::vector<std::pair<std::string, std::string>> files = {

@@ -88,7 +88,10 @@ std::string clean_itk_message(const std::string& description) {
     return text.empty() ? "unknown ITK error" : text;
 }
 
-/// Runs `action`, translating ITK's exceptions (and running out of memory) into dsreg::Error.
+/// Runs `action`, translating ITK's exceptions (and running out of memory) into dsreg::Error, and
+/// whatever the libraries under ITK throw through it: HDF5's C++ exceptions (H5::Exception,
+/// not a std::exception) left ITK's HDF5 reader on a damaged file and ended the process in
+/// std::terminate (found by mutating a small .h5 by hand).
 template <typename Action>
 void translated(const std::string& path, const std::string& doing, Action&& action) {
     try {
@@ -97,6 +100,12 @@ void translated(const std::string& path, const std::string& doing, Action&& acti
         fail_path(path, doing + ": " + clean_itk_message(error.GetDescription()));
     } catch (const std::bad_alloc&) {
         fail_path(path, "not enough memory to " + doing.substr(doing.find(' ') + 1));
+    } catch (const Error&) {
+        throw;  // ours, already naming the file
+    } catch (const std::exception& error) {
+        fail_path(path, doing + ": " + clean_itk_message(error.what()));
+    } catch (...) {
+        fail_path(path, doing + ": the library that decodes it failed (a damaged file?)");
     }
 }
 

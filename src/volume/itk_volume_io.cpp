@@ -69,6 +69,7 @@ std::pair<std::int64_t, std::int64_t> needed_slices(const VoxelDestination& dest
 void read_itk_voxels(const std::string& path, ItkFormat format, const VolumeLimits& limits, VoxelDestination& destination) {
     { const InputFile check(path); }  // a clear message for a missing file, a folder, a device
     if (format == ItkFormat::Tiff) check_tiff_pages(path);
+    if (format == ItkFormat::DicomFile) check_dicom_meta(path);
     ItkImageReader reader(path, format);
     const ImageHeader& header = reader.header();
     if (!prepare_destination(path, header, {path}, limits, destination)) return;
@@ -93,6 +94,10 @@ void read_itk_voxels(const std::string& path, ItkFormat format, const VolumeLimi
 }
 
 void read_dicom_series_voxels(const std::string& folder, const VolumeLimits& limits, VoxelDestination& destination) {
+    // GDCM reads every file of the folder to sort out the series.
+    std::error_code error;
+    for (const auto& entry : std::filesystem::directory_iterator(folder, error))
+        if (entry.is_regular_file(error)) check_dicom_meta(entry.path().string());
     DicomSeriesReader reader(folder);
     const ImageHeader& header = reader.header();
     if (!prepare_destination(folder, header, reader.files(), limits, destination)) return;

@@ -310,6 +310,11 @@ void read_itk_voxels(const std::string& path, ItkFormat format, const VolumeLimi
 /// size, the bits and samples per pixel, the sample format, the planar layout and the subfile
 /// type of the first: ITK's reader assumes so (tiff_pages.cpp).
 void check_tiff_pages(const std::string& path);
+/// Throws (naming the file) where the DICOM file meta information (group 0002 after the "DICM"
+/// preamble) ends before its elements do, names no value representation, or is all the file
+/// holds: Debian's GDCM asserts on those instead of failing (dicom_meta.cpp). Files without the
+/// preamble are left to GDCM.
+void check_dicom_meta(const std::string& path);
 void read_dicom_series_voxels(const std::string& folder, const VolumeLimits& limits, VoxelDestination& destination);
 
 /// Every format dsreg reads, told from the file name (compound extensions such as .nii.gz
