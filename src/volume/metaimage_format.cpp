@@ -8,11 +8,11 @@
 // geometry (Offset, ElementSpacing, TransformMatrix) and must agree on the sizes and value type.
 // The payload (raw, or one zlib stream with CompressedData) is decoded here as it streams.
 // Not supported: ASCII data (BinaryData = False), data split over several files (LIST, patterns).
-#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <memory>
 
+#include "dsreg/text.hpp"
 #include "dsreg/volume_io.hpp"
 #include "image_geometry.hpp"
 #include "image_payload.hpp"
@@ -44,11 +44,8 @@ constexpr std::size_t kMaxTextValueBytes = 200;  ///< a value that is not a list
 
 /// Whether every word of `value` is a number (DimSize, ElementSpacing, TransformMatrix…).
 bool is_number_list(const std::string& value) {
-    for (const std::string& word : split_words(value)) {
-        char* end = nullptr;
-        std::strtod(word.c_str(), &end);
-        if (end != word.c_str() + word.size()) return false;
-    }
+    for (const std::string& word : split_words(value))
+        if (!parse_whole_number(word)) return false;
     return true;
 }
 
