@@ -158,8 +158,15 @@ bool equals_box_of(const BinaryVolume& part, const BinaryVolume& volume, const V
     return true;
 }
 
+/// Whether block-wise runs refuse a box of this file: ITK reads TIFF and DICOM files whole.
+bool read_whole_only(const std::string& path) {
+    const std::string extension = std::filesystem::path(path).extension().string();
+    return extension == ".tif" || extension == ".dcm";
+}
+
 /// A block-wise run's reads of an accepted file: the header probe gives its grid, and a box (the
-/// upper corner, half the grid along each axis) the crop of the whole mask, placed at its corner.
+/// upper corner, half the grid along each axis) the crop of the whole mask, placed at its corner,
+/// or, for the files ITK reads whole, a refusal naming the file.
 void check_box_read(const char* target, const std::string& path, const RawVolumeLayout* layout, const BinaryVolume& volume) {
     const VoxelGrid& g = volume.grid;
     const VoxelGrid header = read_volume_grid(path, layout);
@@ -167,6 +174,16 @@ void check_box_read(const char* target, const std::string& path, const RawVolume
                            header.direction == g.direction,
                "read_volume_grid disagrees with read_volume's grid");
     const VoxelBox box{{g.dims[0] / 2, g.dims[1] / 2, g.dims[2] / 2}, g.dims};
+    if (read_whole_only(path)) {
+        try {
+            read_volume_box(path, box, ValueRange{}, layout);
+        } catch (const Error& error) {
+            const std::string message = error.what();
+            FUZZ_CHECK(target, message.rfind(path + ": block-wise runs", 0) == 0, "unexpected box read refusal: " + message);
+            return;
+        }
+        violated(target, "a box of a file ITK reads whole was read");
+    }
     const BinaryVolume part = read_volume_box(path, box, ValueRange{}, layout);
     FUZZ_CHECK(target, equals_box_of(part, volume, box),
                "read_volume_box differs from the crop of read_volume");
@@ -246,6 +263,10 @@ Outcome fuzz_metaimage(const std::uint8_t* data, std::size_t size) { return volu
 Outcome fuzz_npy(const std::uint8_t* data, std::size_t size) { return volume_target("npy", "npy", data, size); }
 Outcome fuzz_longvol(const std::uint8_t* data, std::size_t size) { return volume_target("longvol", "longvol", data, size); }
 Outcome fuzz_pgm3d(const std::uint8_t* data, std::size_t size) { return volume_target("pgm3d", "pgm3d", data, size); }
+Outcome fuzz_tiff(const std::uint8_t* data, std::size_t size) { return volume_target("tiff", "tif", data, size); }
+Outcome fuzz_hdf5(const std::uint8_t* data, std::size_t size) { return volume_target("hdf5", "h5", data, size); }
+Outcome fuzz_dicom(const std::uint8_t* data, std::size_t size) { return volume_target("dicom", "dcm", data, size); }
+Outcome fuzz_vtkimage(const std::uint8_t* data, std::size_t size) { return volume_target("vtkimage", "vtk", data, size); }
 
 constexpr std::size_t kRawPrefix = 15;
 
@@ -446,6 +467,10 @@ const std::vector<Target>& targets() {
         {"nrrd", "NRRD header and attached payload (raw, gzip)", fuzz_nrrd},
         {"metaimage", "MetaImage .mha header and payload (raw, zlib)", fuzz_metaimage},
         {"npy", "NumPy .npy header and payload", fuzz_npy},
+        {"tiff", "TIFF stack (.tif): dsreg's page checks, ITK's TIFF reader", fuzz_tiff},
+        {"hdf5", "HDF5 image as ITK writes it (.h5), ITK's HDF5 reader", fuzz_hdf5},
+        {"dicom", "one DICOM file (.dcm): dsreg's meta information checks, ITK's GDCM reader", fuzz_dicom},
+        {"vtkimage", "VTK legacy STRUCTURED_POINTS image (.vtk read as a volume), ITK's reader", fuzz_vtkimage},
         {"raw", "headerless .raw, layout from a 15-byte prefix", fuzz_raw},
         {"polynomial", "polynomial parser (--shape)", fuzz_polynomial},
         {"normals", "normals file (--normals-file)", fuzz_normals},

@@ -35,7 +35,7 @@ struct Target {
     TargetFunction run;
 };
 
-/// All targets: vol longvol pgm3d nifti nrrd metaimage npy raw polynomial normals obj off ply stl vtk vtp.
+/// All targets: vol longvol pgm3d nifti nrrd metaimage npy tiff hdf5 dicom vtkimage raw polynomial normals obj off ply stl vtk vtp.
 const std::vector<Target>& targets();
 
 /// The target named `name`, or nullptr.

@@ -3,7 +3,8 @@
 //   dsreg_fuzz_seeds OUT_DIR      creates OUT_DIR/<target>/seed-* for every target
 //
 // Small volumes (.vol v2/v3, .longvol v2/v3, .pgm3d P2/P5 with 1- and 2-byte values, .raw of
-// several types; NIfTI, NRRD and MetaImage by ITK's writers, .npy), polynomials (the named
+// several types; NIfTI, NRRD, MetaImage, TIFF, HDF5 and VTK images by ITK's writers, single
+// DICOM slices, .npy), polynomials (the named
 // shapes, written by Polynomial::to_string), normals files (write_normals_file) and meshes
 // (write_mesh: OBJ, OFF, PLY with attributes, STL, VTK, VTP).
 #include <cmath>
@@ -84,6 +85,29 @@ void volume_seeds(const fs::path& out) {
     write_bytes(out / "raw" / "seed-float32-header", fuzz::raw_input(5, 4, 3, 8, false, 4, floats));
 }
 
+/// One slice of a DICOM series written by write_dicom_series (a single-frame .dcm file).
+void dicom_slice_seed(const fs::path& out, const std::string& name, const VoxelGrid& grid, const std::vector<double>& values,
+                      RawVoxelType type) {
+    const fs::path series = out / ".dicom-series";
+    fs::create_directories(series);
+    write_dicom_series(series.string(), grid, values, type);
+    fs::copy_file(series / "slice0001.dcm", out / "dicom" / name);
+    fs::remove_all(series);
+}
+
+/// TIFF stacks, HDF5 and VTK legacy images by ITK's writers (write_image), and DICOM slices: the
+/// formats ITK decodes, of the same small image.
+void itk_seeds(const fs::path& out, const VoxelGrid& grid, const std::vector<double>& values) {
+    write_image((out / "tiff" / "seed-uint8.tif").string(), grid, values, RawVoxelType::UInt8, false);
+    write_image((out / "tiff" / "seed-uint16.tif").string(), grid, values, RawVoxelType::UInt16, false);
+    write_image((out / "hdf5" / "seed-uint8.h5").string(), grid, values, RawVoxelType::UInt8, false);
+    write_image((out / "hdf5" / "seed-float32.h5").string(), grid, values, RawVoxelType::Float32, false);
+    write_image((out / "vtkimage" / "seed-uint8.vtk").string(), grid, values, RawVoxelType::UInt8, false);
+    write_image((out / "vtkimage" / "seed-int16.vtk").string(), grid, values, RawVoxelType::Int16, false);
+    dicom_slice_seed(out, "seed-uint8.dcm", grid, values, RawVoxelType::UInt8);
+    dicom_slice_seed(out, "seed-int16.dcm", grid, values, RawVoxelType::Int16);
+}
+
 /// NIfTI (.nii, .nii.gz, 8- and 16-bit), NRRD (raw, gzip), MetaImage (raw, compressed) and .npy
 /// files of a small oblique image, written by ITK's writers (write_image) and write_npy.
 void medical_seeds(const fs::path& out) {
@@ -103,6 +127,7 @@ void medical_seeds(const fs::path& out) {
     write_image((out / "metaimage" / "seed-zlib.mha").string(), grid, values, RawVoxelType::UInt8, true);
     write_npy((out / "npy" / "seed-c-order.npy").string(), grid.dims, values, RawVoxelType::Int16, false);
     write_npy((out / "npy" / "seed-fortran.npy").string(), grid.dims, values, RawVoxelType::Float64, true);
+    itk_seeds(out, grid, values);
 }
 
 void polynomial_seeds(const fs::path& out) {

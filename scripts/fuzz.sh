@@ -17,7 +17,7 @@ shift || true
 [[ $seconds =~ ^[0-9]+$ ]] || { echo "usage: $0 [SECONDS] [TARGET...]" >&2; exit 2; }
 build=${BUILD_DIR:-build/fuzz}
 jobs=${JOBS:-2}
-all_targets=(vol longvol pgm3d nifti nrrd metaimage npy raw polynomial normals obj off ply stl vtk vtp)
+all_targets=(vol longvol pgm3d nifti nrrd metaimage npy tiff hdf5 dicom vtkimage raw polynomial normals obj off ply stl vtk vtp)
 targets=("${@:-${all_targets[@]}}")
 
 if [[ ${SKIP_BUILD:-0} != 1 ]]; then
