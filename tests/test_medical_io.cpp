@@ -391,6 +391,30 @@ void expect_refused(const std::string& path, const std::string& says) {
     }
 }
 
+TEST(MedicalIo, TiffTagsItkCopiesUnsafelyAreRefusedBeforeItkReadsThem) {
+    // ITK's TIFF reader copies every tag into its metadata: 20 bytes of a DateTime, whatever its
+    // length (heap overflow), and DotRange with one pointer where its libtiff writes two (a
+    // crash). Both found by fuzzing; here the Software tag ITK writes becomes either.
+    ScratchFolder scratch("medical-tiff-tags");
+    const VoxelGrid grid = test::oblique_grid({8, 7, 4});
+    const std::string good = scratch.path("good.tif");
+    write_image(good, grid, test::sample_ellipsoid(grid, test::test_ellipsoid(grid), 3), RawVoxelType::UInt8);
+    const std::string bytes = read_bytes(good);
+    const std::size_t software = tiff_tag_value_offset(bytes, 0, 305);
+    ASSERT_NE(software, std::string::npos) << "ITK's writer no longer writes a Software tag";
+    const std::size_t entry = software - 8;
+    const auto put16 = [](std::string& b, std::size_t at, std::uint16_t v) { b[at] = char(v & 0xff), b[at + 1] = char(v >> 8); };
+    std::string date_time = bytes;  // "InsightToolkit" as a DateTime: 14 characters
+    put16(date_time, entry, 306);
+    write_bytes(scratch.path("date-time.tif"), date_time);
+    expect_refused(scratch.path("date-time.tif"), "page 1 has a DateTime tag of 14 characters");
+    std::string dot_range = bytes;  // DotRange, two shorts: 7 and 9
+    put16(dot_range, entry, 336), put16(dot_range, entry + 2, 3), put16(dot_range, entry + 4, 2), put16(dot_range, entry + 6, 0);
+    put16(dot_range, entry + 8, 7), put16(dot_range, entry + 10, 9);
+    write_bytes(scratch.path("dot-range.tif"), dot_range);
+    expect_refused(scratch.path("dot-range.tif"), "page 1 has a DotRange tag");
+}
+
 TEST(MedicalIo, DamagedHdf5IsAnErrorNotACrash) {
     // HDF5's C++ exceptions (not std::exception) crossed ITK's reader and ended the process in
     // std::terminate: here the signature of the chunk index ("TREE") is damaged.

@@ -4,10 +4,12 @@
 // page and the number of slices from the directories' subfile types, then decodes every
 // directory as it comes: a stack whose second directory lost its "page" subfile type (one
 // mutated byte) had one slice less allocated than written, a heap overflow that aborted at exit
-// (found by mutating a small stack). So every directory must be a page described like the first.
+// (found by mutating a small stack). So every directory must be a page described like the first,
+// and hold no tag that ITK copies unsafely (check_page_tags).
 #include <tiffio.h>
 
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -48,6 +50,28 @@ TiffPage current_page(TIFF* tiff) {
     return page;
 }
 
+/// ITK's reader copies the 20 bytes a DateTime tag is defined to hold ("YYYY:MM:DD HH:MM:SS" and
+/// its NUL) whatever the file stores: a shorter one was read past its end (heap overflow).
+void check_date_time(const std::string& path, TIFF* tiff, std::int64_t index) {
+    const char* text = nullptr;
+    if (!TIFFGetField(tiff, TIFFTAG_DATETIME, &text) || text == nullptr) return;
+    const std::size_t length = std::strlen(text);
+    if (length != 19)
+        fail(path, "page " + std::to_string(index) + " has a DateTime tag of " + std::to_string(length) +
+                       " characters, not the 19 of 'YYYY:MM:DD HH:MM:SS' (ITK's TIFF reader reads 20 bytes)");
+}
+
+/// The tags ITK's reader copies into its metadata unsafely (both found by fuzzing): a DateTime
+/// of another length, and DotRange, which it asks of its libtiff with one pointer where two are
+/// written (a write to a stray address: the process crashed).
+void check_page_tags(const std::string& path, TIFF* tiff, std::int64_t index) {
+    const int count = TIFFGetTagListCount(tiff);
+    for (int i = 0; i < count; ++i)
+        if (TIFFGetTagListEntry(tiff, i) == TIFFTAG_DOTRANGE)
+            fail(path, "page " + std::to_string(index) + " has a DotRange tag, which ITK's TIFF reader cannot read");
+    check_date_time(path, tiff, index);
+}
+
 struct TiffCloser {
     void operator()(TIFF* tiff) const { TIFFClose(tiff); }
 };
@@ -63,7 +87,9 @@ void check_tiff_pages(const std::string& path) {
     const std::unique_ptr<TIFF, TiffCloser> tiff(TIFFOpen(path.c_str(), "rm"));
     if (!tiff) fail(path, "not a TIFF file that libtiff can open");
     const TiffPage first = current_page(tiff.get());
+    check_page_tags(path, tiff.get(), 1);
     for (std::int64_t index = 2; TIFFReadDirectory(tiff.get()); ++index) {
+        check_page_tags(path, tiff.get(), index);
         const TiffPage page = current_page(tiff.get());
         if (!(page == first))
             fail(path, "page " + std::to_string(index) + " is " + page.text() + ", page 1 " + first.text() +
