@@ -413,6 +413,10 @@ TEST(MedicalIo, TiffTagsItkCopiesUnsafelyAreRefusedBeforeItkReadsThem) {
     put16(dot_range, entry + 8, 7), put16(dot_range, entry + 10, 9);
     write_bytes(scratch.path("dot-range.tif"), dot_range);
     expect_refused(scratch.path("dot-range.tif"), "page 1 has a DotRange tag");
+    std::string one_byte = bytes;  // an unknown tag 65000, one byte of text without a NUL
+    put16(one_byte, entry, 65000), put16(one_byte, entry + 4, 1), put16(one_byte, entry + 8, 1);
+    write_bytes(scratch.path("one-byte.tif"), one_byte);
+    expect_refused(scratch.path("one-byte.tif"), "page 1 has an unknown text tag 65000 of one byte");
 }
 
 TEST(MedicalIo, DamagedHdf5IsAnErrorNotACrash) {

@@ -61,14 +61,32 @@ void check_date_time(const std::string& path, TIFF* tiff, std::int64_t index) {
                        " characters, not the 19 of 'YYYY:MM:DD HH:MM:SS' (ITK's TIFF reader reads 20 bytes)");
 }
 
-/// The tags ITK's reader copies into its metadata unsafely (both found by fuzzing): a DateTime
-/// of another length, and DotRange, which it asks of its libtiff with one pointer where two are
-/// written (a write to a stray address: the process crashed).
+/// ITK's reader reads a one-byte text tag as a C string: the byte of a tag libtiff does not
+/// know, kept without a NUL after it, was read past its end (heap overflow). This libtiff puts a
+/// NUL in place of that byte, so any one-byte text of an unknown tag is refused.
+void check_one_byte_text(const std::string& path, TIFF* tiff, std::uint32_t tag, std::int64_t index) {
+    const TIFFField* field = TIFFFieldWithTag(tiff, tag);
+    if (field == nullptr || TIFFFieldDataType(field) != TIFF_ASCII || !TIFFFieldPassCount(field) ||
+        TIFFFieldReadCount(field) != TIFF_VARIABLE2)
+        return;
+    std::uint32_t count = 0;
+    const char* text = nullptr;
+    if (TIFFGetField(tiff, tag, &count, &text) && count == 1)
+        fail(path, "page " + std::to_string(index) + " has an unknown text tag " + std::to_string(tag) +
+                       " of one byte (ITK's TIFF reader reads it as a C string, past its end)");
+}
+
+/// The tags ITK's reader copies into its metadata unsafely (all found by fuzzing): a DateTime
+/// of another length, DotRange, which it asks of its libtiff with one pointer where two are
+/// written (a write to a stray address: the process crashed), one-byte texts of unknown tags.
 void check_page_tags(const std::string& path, TIFF* tiff, std::int64_t index) {
     const int count = TIFFGetTagListCount(tiff);
-    for (int i = 0; i < count; ++i)
-        if (TIFFGetTagListEntry(tiff, i) == TIFFTAG_DOTRANGE)
+    for (int i = 0; i < count; ++i) {
+        const auto tag = static_cast<std::uint32_t>(TIFFGetTagListEntry(tiff, i));
+        if (tag == TIFFTAG_DOTRANGE)
             fail(path, "page " + std::to_string(index) + " has a DotRange tag, which ITK's TIFF reader cannot read");
+        check_one_byte_text(path, tiff, tag, index);
+    }
     check_date_time(path, tiff, index);
 }
 
