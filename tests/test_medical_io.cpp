@@ -419,6 +419,28 @@ TEST(MedicalIo, TiffTagsItkCopiesUnsafelyAreRefusedBeforeItkReadsThem) {
     expect_refused(scratch.path("one-byte.tif"), "page 1 has an unknown text tag 65000 of one byte");
 }
 
+TEST(MedicalIo, VtkImageHeaderLinesAreCheckedBeforeItkReadsThem) {
+    // ITK's reader scans each header line as a C string: a NUL byte in the SPACING line left the
+    // other spacings uninitialized (two reads gave two grids; found by fuzzing).
+    ScratchFolder scratch("medical-vtk-header");
+    const VoxelGrid grid = test::oblique_grid({8, 7, 4});
+    const std::string good = scratch.path("good.vtk");
+    write_image(good, grid, test::sample_ellipsoid(grid, test::test_ellipsoid(grid), 3), RawVoxelType::UInt8);
+    const std::string bytes = read_bytes(good);
+    const std::size_t spacing = bytes.find("\nSPACING ");
+    ASSERT_NE(spacing, std::string::npos) << "ITK's writer no longer writes a SPACING line";
+    const std::size_t second = bytes.find(' ', spacing + 9);
+    std::string nul = bytes;
+    nul[second] = '\0';
+    write_bytes(scratch.path("nul.vtk"), nul);
+    expect_refused(scratch.path("nul.vtk"), "holds control characters");
+    std::string two = bytes;
+    two.erase(second, bytes.find('\n', spacing + 1) - second);  // "SPACING x"
+    two.insert(second, " 1");
+    write_bytes(scratch.path("two.vtk"), two);
+    expect_refused(scratch.path("two.vtk"), "('SPACING') gives 2 values, not 3");
+}
+
 TEST(MedicalIo, DamagedHdf5IsAnErrorNotACrash) {
     // HDF5's C++ exceptions (not std::exception) crossed ITK's reader and ended the process in
     // std::terminate: here the signature of the chunk index ("TREE") is damaged.

@@ -70,6 +70,7 @@ void read_itk_voxels(const std::string& path, ItkFormat format, const VolumeLimi
     { const InputFile check(path); }  // a clear message for a missing file, a folder, a device
     if (format == ItkFormat::Tiff) check_tiff_pages(path);
     if (format == ItkFormat::DicomFile) check_dicom_meta(path);
+    if (format == ItkFormat::VtkImage) check_vtk_image_header(path);
     ItkImageReader reader(path, format);
     const ImageHeader& header = reader.header();
     if (!prepare_destination(path, header, {path}, limits, destination)) return;

@@ -315,6 +315,9 @@ void check_tiff_pages(const std::string& path);
 /// holds: Debian's GDCM asserts on those instead of failing (dicom_meta.cpp). Files without the
 /// preamble are left to GDCM.
 void check_dicom_meta(const std::string& path);
+/// Checks the header lines of a legacy VTK image before ITK reads it (vtk_image_header.cpp): text,
+/// and three numbers on each geometry line. Throws naming the file and the line.
+void check_vtk_image_header(const std::string& path);
 void read_dicom_series_voxels(const std::string& folder, const VolumeLimits& limits, VoxelDestination& destination);
 
 /// Every format dsreg reads, told from the file name (compound extensions such as .nii.gz
