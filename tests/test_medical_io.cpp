@@ -483,6 +483,13 @@ TEST(MedicalIo, DicomMetaInformationThatEndsEarlyIsRefusedBeforeGdcmReadsIt) {
     no_vr[136] = no_vr[137] = '\x01';
     write_bytes(damaged.path("no-vr.dcm"), no_vr);
     expect_refused(damaged.path("no-vr.dcm"), "(0002,0000) has no explicit value representation");
+    // GDCM allocates what a data element's length says: the first element of the data set
+    // (implicit VR little endian, as ITK writes it: tag, then a 4-byte length) says 1.8 GB.
+    std::string long_element = bytes;
+    const std::uint32_t huge = 0x70000000;
+    std::memcpy(&long_element[meta_end + 4], &huge, 4);
+    write_bytes(damaged.path("long-element.dcm"), long_element);
+    expect_refused(damaged.path("long-element.dcm"), "announces 1879048192 bytes, but the file holds");
     // In a series folder, GDCM reads every file: one cut file is named.
     write_bytes(scratch.path(slices[1]), bytes.substr(0, meta_end - 3));
     expect_refused(scratch.path(slices[1]), "the file ends inside its DICOM meta information");

@@ -312,8 +312,9 @@ void read_itk_voxels(const std::string& path, ItkFormat format, const VolumeLimi
 void check_tiff_pages(const std::string& path);
 /// Throws (naming the file) where the DICOM file meta information (group 0002 after the "DICM"
 /// preamble) ends before its elements do, names no value representation, or is all the file
-/// holds: Debian's GDCM asserts on those instead of failing (dicom_meta.cpp). Files without the
-/// preamble are left to GDCM.
+/// holds: Debian's GDCM asserts on those instead of failing (dicom_meta.cpp); or where an element
+/// of the data set announces more bytes than the file holds (GDCM allocates them). Files without
+/// the preamble are left to GDCM.
 void check_dicom_meta(const std::string& path);
 /// Checks the header lines of a legacy VTK image before ITK reads it (vtk_image_header.cpp): text,
 /// and three numbers on each geometry line. Throws naming the file and the line.
