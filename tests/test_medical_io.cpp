@@ -419,6 +419,26 @@ TEST(MedicalIo, TiffTagsItkCopiesUnsafelyAreRefusedBeforeItkReadsThem) {
     expect_refused(scratch.path("one-byte.tif"), "page 1 has an unknown text tag 65000 of one byte");
 }
 
+TEST(MedicalIo, TiffDirectoryLoopIsRefusedBeforeItkReadsIt) {
+    // ITK's libtiff counts the directories without noticing a loop: a directory naming itself as
+    // the next one hung the reader (found by fuzzing). Here page 2 names itself.
+    ScratchFolder scratch("medical-tiff-loop");
+    const VoxelGrid grid = test::oblique_grid({8, 7, 4});
+    const std::string good = scratch.path("good.tif");
+    write_image(good, grid, test::sample_ellipsoid(grid, test::test_ellipsoid(grid), 3), RawVoxelType::UInt8);
+    std::string bytes = read_bytes(good);
+    ASSERT_NE(tiff_tag_value_offset(bytes, 1, 256), std::string::npos) << "not a little-endian stack of pages";
+    std::uint32_t first_ifd = 0, second_ifd = 0;
+    std::uint16_t entries = 0;
+    std::memcpy(&first_ifd, &bytes[4], 4);
+    std::memcpy(&entries, &bytes[first_ifd], 2);
+    std::memcpy(&second_ifd, &bytes[first_ifd + 2 + 12 * std::size_t(entries)], 4);
+    std::memcpy(&entries, &bytes[second_ifd], 2);
+    std::memcpy(&bytes[second_ifd + 2 + 12 * std::size_t(entries)], &second_ifd, 4);
+    write_bytes(scratch.path("loop.tif"), bytes);
+    expect_refused(scratch.path("loop.tif"), "directory 3 cannot be read (a loop in the chain of directories");
+}
+
 TEST(MedicalIo, VtkImageHeaderLinesAreCheckedBeforeItkReadsThem) {
     // ITK's reader scans each header line as a C string: a NUL byte in the SPACING line left the
     // other spacings uninitialized (two reads gave two grids; found by fuzzing).

@@ -106,7 +106,13 @@ void check_tiff_pages(const std::string& path) {
     if (!tiff) fail(path, "not a TIFF file that libtiff can open");
     const TiffPage first = current_page(tiff.get());
     check_page_tags(path, tiff.get(), 1);
-    for (std::int64_t index = 2; TIFFReadDirectory(tiff.get()); ++index) {
+    // ITK's libtiff (4.0.3) counts the directories without noticing a loop in their chain: a
+    // directory that named itself as the next one hung the reader (found by fuzzing). This one
+    // refuses to read a directory twice, as it refuses a damaged one.
+    for (std::int64_t index = 2; !TIFFLastDirectory(tiff.get()); ++index) {
+        if (!TIFFReadDirectory(tiff.get()))
+            fail(path, "directory " + std::to_string(index) +
+                           " cannot be read (a loop in the chain of directories, or a damaged directory)");
         check_page_tags(path, tiff.get(), index);
         const TiffPage page = current_page(tiff.get());
         if (!(page == first))
