@@ -459,6 +459,9 @@ TEST(MedicalIo, VtkImageHeaderLinesAreCheckedBeforeItkReadsThem) {
     two.insert(second, " 1");
     write_bytes(scratch.path("two.vtk"), two);
     expect_refused(scratch.path("two.vtk"), "('SPACING') gives 2 values, not 3");
+    // ITK's reader took a binary payload cut short without a word (the last voxels unset).
+    write_bytes(scratch.path("short.vtk"), bytes.substr(0, bytes.size() - 5));
+    expect_refused(scratch.path("short.vtk"), "truncated payload: the header says 224 voxels of 1 bytes = 224 bytes");
 }
 
 TEST(MedicalIo, DamagedHdf5IsAnErrorNotACrash) {

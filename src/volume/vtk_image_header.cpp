@@ -3,7 +3,8 @@
 // ITK's reader (5.2) scans each header line as a C string: a line cut by a NUL byte
 // ("SPACING 7.5\0...") left the other spacings unset, taken from uninitialized memory, so two
 // reads of one file gave two grids (found by fuzzing). So the header lines (all but the title)
-// must be text, and DIMENSIONS, SPACING (or ASPECT_RATIO) and ORIGIN must give three numbers.
+// must be text, and DIMENSIONS, SPACING (or ASPECT_RATIO) and ORIGIN must give three numbers;
+// POINT_DATA must count the voxels, and a binary payload must hold them (check_payload).
 #include <cmath>
 #include <optional>
 #include <string>
@@ -40,10 +41,55 @@ void check_geometry_line(const InputFile& file, std::int64_t number, const std::
     }
 }
 
+/// What the header says of the voxels that follow it.
+struct VtkImageHeader {
+    bool binary = false;
+    std::int64_t voxels = 0;      ///< DIMENSIONS' product, 0 before that line
+    std::int64_t point_data = 0;  ///< POINT_DATA's count, 0 before that line
+    int value_bytes = 0;          ///< of the SCALARS type, 0 if unknown
+    std::int64_t components = 1;
+};
+
+/// Bytes of a VTK scalar type name, or 0.
+int vtk_type_bytes(const std::string& type) {
+    if (type == "char" || type == "unsigned_char") return 1;
+    if (type == "short" || type == "unsigned_short") return 2;
+    if (type == "int" || type == "unsigned_int" || type == "float") return 4;
+    if (type == "long" || type == "unsigned_long" || type == "double") return 8;
+    return 0;
+}
+
+void note_line(const std::string& keyword, const std::vector<std::string>& words, VtkImageHeader& header) {
+    std::int64_t number = 0;
+    if (keyword == "binary") header.binary = true;
+    if (keyword == "dimensions") {
+        header.voxels = 1;
+        for (std::size_t w = 1; w < 4; ++w) header.voxels = parse_integer(words[w], number) && number < (1 << 20) ? header.voxels * number : -1;
+    }
+    if (keyword == "point_data" && words.size() == 2 && parse_integer(words[1], number)) header.point_data = number;
+    if (keyword == "scalars" && words.size() >= 3) header.value_bytes = vtk_type_bytes(to_lower(words[2]));
+    if (keyword == "scalars" && words.size() >= 4 && parse_integer(words[3], number)) header.components = number;
+}
+
+/// POINT_DATA counts the voxels, and a binary payload holds them all: ITK's reader took a
+/// short one without a word, leaving the last voxels unset (found by fuzzing).
+void check_payload(const InputFile& file, const VtkImageHeader& header) {
+    if (header.voxels > 0 && header.point_data != header.voxels)
+        file.fail("POINT_DATA " + std::to_string(header.point_data) + " differs from the " + std::to_string(header.voxels) +
+                  " voxels of DIMENSIONS");
+    if (!header.binary || header.value_bytes == 0 || header.voxels <= 0 || header.components < 1 || header.components > 4) return;
+    const std::uint64_t needed = static_cast<std::uint64_t>(header.voxels * header.components * header.value_bytes);
+    if (file.remaining() < needed)
+        file.fail("truncated payload: the header says " + std::to_string(header.voxels) + " voxels of " +
+                  std::to_string(header.components * header.value_bytes) + " bytes = " + std::to_string(needed) +
+                  " bytes, the file holds " + std::to_string(file.remaining()) + " after the header");
+}
+
 }  // namespace
 
 void check_vtk_image_header(const std::string& path) {
     InputFile file(path);
+    VtkImageHeader header;
     std::string line;
     for (std::int64_t number = 1; read_header_line(file, line, kMaxHeaderBytes); ++number) {
         if (number == 2) continue;  // the title: free text
@@ -53,7 +99,8 @@ void check_vtk_image_header(const std::string& path) {
         const std::string keyword = to_lower(words[0]);
         if (keyword == "dimensions" || keyword == "spacing" || keyword == "aspect_ratio" || keyword == "origin")
             check_geometry_line(file, number, keyword, words);
-        if (keyword == "lookup_table") return;  // the voxels follow
+        note_line(keyword, words, header);
+        if (keyword == "lookup_table") return check_payload(file, header);  // the voxels follow
     }
 }
 
