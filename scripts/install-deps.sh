@@ -18,7 +18,7 @@
 # libjs-three is a build dependency: three.js is inlined into dsreg's HTML pages (docs/viewer.md).
 set -euo pipefail
 packages=(build-essential cmake pkg-config libeigen3-dev libsuitesparse-dev libopenblas-dev zlib1g-dev
-          libcli11-dev nlohmann-json3-dev libcgal-dev libjs-three libinsighttoolkit5-dev libgdcm-tools libtiff-dev)
+          libcli11-dev nlohmann-json3-dev libcgal-dev libjs-three libinsighttoolkit5-dev libgdcm-tools libtiff-dev libhdf5-dev)
 dev=(libgtest-dev libgmock-dev libbenchmark-dev python3 python3-numpy python3-nibabel python3-vtk9)
 bench=(python3 python3-vtk9 python3-numpy)
 python=(python3-dev python3-numpy python3-venv python3-setuptools python3-wheel pybind11-dev)

@@ -479,6 +479,23 @@ TEST(MedicalIo, DamagedHdf5IsAnErrorNotACrash) {
     expect_refused(path, "cannot read the HDF5 voxels");
 }
 
+TEST(MedicalIo, Hdf5ChunkIndexClaimingMoreThanTheFileIsRefusedBeforeItkReadsIt) {
+    // HDF5 allocates a chunk as its index says it is stored: 1.6 GB for a 13 KB file (found by
+    // fuzzing). Here the first chunk's size in the chunk index (a v1 B-tree of type 1) lies.
+    ScratchFolder scratch("medical-hdf5-chunks");
+    const VoxelGrid grid = test::oblique_grid({24, 20, 16});
+    const std::string path = scratch.path("a.h5");
+    write_image(path, grid, test::sample_ellipsoid(grid, test::test_ellipsoid(grid), 3), RawVoxelType::UInt8);
+    std::string bytes = read_bytes(path);
+    std::size_t tree = bytes.find("TREE");
+    while (tree != std::string::npos && bytes[tree + 4] != 1) tree = bytes.find("TREE", tree + 4);
+    ASSERT_NE(tree, std::string::npos) << "ITK's HDF5 writer no longer indexes its chunks with a v1 B-tree";
+    const std::uint32_t huge = 0x60000000;
+    std::memcpy(&bytes[tree + 24], &huge, 4);  // after the node's signature, type, level, count, siblings
+    write_bytes(path, bytes);
+    expect_refused(path, "the voxel data set claims");
+}
+
 TEST(MedicalIo, DicomMetaInformationThatEndsEarlyIsRefusedBeforeGdcmReadsIt) {
     // Debian's GDCM asserts (aborts the process) where the file meta information group 0002 runs
     // past the end of the file, names no value representation, or is all the file holds.

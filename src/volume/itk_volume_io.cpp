@@ -71,6 +71,7 @@ void read_itk_voxels(const std::string& path, ItkFormat format, const VolumeLimi
     if (format == ItkFormat::Tiff) check_tiff_pages(path);
     if (format == ItkFormat::DicomFile) check_dicom_meta(path);
     if (format == ItkFormat::VtkImage) check_vtk_image_header(path);
+    if (format == ItkFormat::Hdf5) check_hdf5_voxel_data(path);
     ItkImageReader reader(path, format);
     const ImageHeader& header = reader.header();
     if (!prepare_destination(path, header, {path}, limits, destination)) return;
