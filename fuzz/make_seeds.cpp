@@ -13,6 +13,7 @@
 #include <fstream>
 #include <iostream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "dsreg/implicit_shape.hpp"
@@ -98,12 +99,12 @@ void dicom_slice_seed(const fs::path& out, const std::string& name, const VoxelG
 /// TIFF stacks, HDF5 and VTK legacy images by ITK's writers (write_image), and DICOM slices: the
 /// formats ITK decodes, of the same small image.
 void itk_seeds(const fs::path& out, const VoxelGrid& grid, const std::vector<double>& values) {
-    write_image((out / "tiff" / "seed-uint8.tif").string(), grid, values, RawVoxelType::UInt8, false);
-    write_image((out / "tiff" / "seed-uint16.tif").string(), grid, values, RawVoxelType::UInt16, false);
-    write_image((out / "hdf5" / "seed-uint8.h5").string(), grid, values, RawVoxelType::UInt8, false);
-    write_image((out / "hdf5" / "seed-float32.h5").string(), grid, values, RawVoxelType::Float32, false);
-    write_image((out / "vtkimage" / "seed-uint8.vtk").string(), grid, values, RawVoxelType::UInt8, false);
-    write_image((out / "vtkimage" / "seed-int16.vtk").string(), grid, values, RawVoxelType::Int16, false);
+    const std::pair<const char*, RawVoxelType> images[] = {
+        {"tiff/seed-uint8.tif", RawVoxelType::UInt8},   {"tiff/seed-uint16.tif", RawVoxelType::UInt16},
+        {"hdf5/seed-uint8.h5", RawVoxelType::UInt8},    {"hdf5/seed-float32.h5", RawVoxelType::Float32},
+        {"vtkimage/seed-uint8.vtk", RawVoxelType::UInt8}, {"vtkimage/seed-int16.vtk", RawVoxelType::Int16},
+    };
+    for (const auto& [file, type] : images) write_image((out / file).string(), grid, values, type, false);
     dicom_slice_seed(out, "seed-uint8.dcm", grid, values, RawVoxelType::UInt8);
     dicom_slice_seed(out, "seed-int16.dcm", grid, values, RawVoxelType::Int16);
 }

@@ -391,15 +391,19 @@ void expect_refused(const std::string& path, const std::string& says) {
     }
 }
 
+/// The bytes of a small label image (8x7x4 voxels, uint8) written by ITK as `name` in `scratch`.
+std::string small_image_bytes(const ScratchFolder& scratch, const std::string& name) {
+    const VoxelGrid grid = test::oblique_grid({8, 7, 4});
+    write_image(scratch.path(name), grid, test::sample_ellipsoid(grid, test::test_ellipsoid(grid), 3), RawVoxelType::UInt8);
+    return read_bytes(scratch.path(name));
+}
+
 TEST(MedicalIo, TiffTagsItkCopiesUnsafelyAreRefusedBeforeItkReadsThem) {
     // ITK's TIFF reader copies every tag into its metadata: 20 bytes of a DateTime, whatever its
     // length (heap overflow), and DotRange with one pointer where its libtiff writes two (a
     // crash). Both found by fuzzing; here the Software tag ITK writes becomes either.
     ScratchFolder scratch("medical-tiff-tags");
-    const VoxelGrid grid = test::oblique_grid({8, 7, 4});
-    const std::string good = scratch.path("good.tif");
-    write_image(good, grid, test::sample_ellipsoid(grid, test::test_ellipsoid(grid), 3), RawVoxelType::UInt8);
-    const std::string bytes = read_bytes(good);
+    const std::string bytes = small_image_bytes(scratch, "good.tif");
     const std::size_t software = tiff_tag_value_offset(bytes, 0, 305);
     ASSERT_NE(software, std::string::npos) << "ITK's writer no longer writes a Software tag";
     const std::size_t entry = software - 8;
@@ -423,10 +427,7 @@ TEST(MedicalIo, TiffDirectoryLoopIsRefusedBeforeItkReadsIt) {
     // ITK's libtiff counts the directories without noticing a loop: a directory naming itself as
     // the next one hung the reader (found by fuzzing). Here page 2 names itself.
     ScratchFolder scratch("medical-tiff-loop");
-    const VoxelGrid grid = test::oblique_grid({8, 7, 4});
-    const std::string good = scratch.path("good.tif");
-    write_image(good, grid, test::sample_ellipsoid(grid, test::test_ellipsoid(grid), 3), RawVoxelType::UInt8);
-    std::string bytes = read_bytes(good);
+    std::string bytes = small_image_bytes(scratch, "good.tif");
     ASSERT_NE(tiff_tag_value_offset(bytes, 1, 256), std::string::npos) << "not a little-endian stack of pages";
     std::uint32_t first_ifd = 0, second_ifd = 0;
     std::uint16_t entries = 0;
@@ -443,10 +444,7 @@ TEST(MedicalIo, VtkImageHeaderLinesAreCheckedBeforeItkReadsThem) {
     // ITK's reader scans each header line as a C string: a NUL byte in the SPACING line left the
     // other spacings uninitialized (two reads gave two grids; found by fuzzing).
     ScratchFolder scratch("medical-vtk-header");
-    const VoxelGrid grid = test::oblique_grid({8, 7, 4});
-    const std::string good = scratch.path("good.vtk");
-    write_image(good, grid, test::sample_ellipsoid(grid, test::test_ellipsoid(grid), 3), RawVoxelType::UInt8);
-    const std::string bytes = read_bytes(good);
+    const std::string bytes = small_image_bytes(scratch, "good.vtk");
     const std::size_t spacing = bytes.find("\nSPACING ");
     ASSERT_NE(spacing, std::string::npos) << "ITK's writer no longer writes a SPACING line";
     const std::size_t second = bytes.find(' ', spacing + 9);
@@ -483,17 +481,14 @@ TEST(MedicalIo, Hdf5ChunkIndexClaimingMoreThanTheFileIsRefusedBeforeItkReadsIt) 
     // HDF5 allocates a chunk as its index says it is stored: 1.6 GB for a 13 KB file (found by
     // fuzzing). Here the first chunk's size in the chunk index (a v1 B-tree of type 1) lies.
     ScratchFolder scratch("medical-hdf5-chunks");
-    const VoxelGrid grid = test::oblique_grid({24, 20, 16});
-    const std::string path = scratch.path("a.h5");
-    write_image(path, grid, test::sample_ellipsoid(grid, test::test_ellipsoid(grid), 3), RawVoxelType::UInt8);
-    std::string bytes = read_bytes(path);
+    std::string bytes = small_image_bytes(scratch, "a.h5");
     std::size_t tree = bytes.find("TREE");
     while (tree != std::string::npos && bytes[tree + 4] != 1) tree = bytes.find("TREE", tree + 4);
     ASSERT_NE(tree, std::string::npos) << "ITK's HDF5 writer no longer indexes its chunks with a v1 B-tree";
     const std::uint32_t huge = 0x60000000;
     std::memcpy(&bytes[tree + 24], &huge, 4);  // after the node's signature, type, level, count, siblings
-    write_bytes(path, bytes);
-    expect_refused(path, "the voxel data set claims");
+    write_bytes(scratch.path("a.h5"), bytes);
+    expect_refused(scratch.path("a.h5"), "the voxel data set claims");
 }
 
 TEST(MedicalIo, DicomMetaInformationThatEndsEarlyIsRefusedBeforeGdcmReadsIt) {
