@@ -417,6 +417,10 @@ TEST(MedicalIo, TiffTagsItkCopiesUnsafelyAreRefusedBeforeItkReadsThem) {
     put16(dot_range, entry + 8, 7), put16(dot_range, entry + 10, 9);
     write_bytes(scratch.path("dot-range.tif"), dot_range);
     expect_refused(scratch.path("dot-range.tif"), "page 1 has a DotRange tag");
+    std::string long_text = bytes;  // the Software tag counting 1.8 billion characters
+    put16(long_text, entry + 4, 0), put16(long_text, entry + 6, 0x6b6c);
+    write_bytes(scratch.path("long-text.tif"), long_text);
+    expect_refused(scratch.path("long-text.tif"), "directory 1: tag 305 claims 1802240000 values, more than the file holds");
     std::string one_byte = bytes;  // an unknown tag 65000, one byte of text without a NUL
     put16(one_byte, entry, 65000), put16(one_byte, entry + 4, 1), put16(one_byte, entry + 8, 1);
     write_bytes(scratch.path("one-byte.tif"), one_byte);

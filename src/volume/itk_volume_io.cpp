@@ -68,7 +68,10 @@ std::pair<std::int64_t, std::int64_t> needed_slices(const VoxelDestination& dest
 
 void read_itk_voxels(const std::string& path, ItkFormat format, const VolumeLimits& limits, VoxelDestination& destination) {
     { const InputFile check(path); }  // a clear message for a missing file, a folder, a device
-    if (format == ItkFormat::Tiff) check_tiff_pages(path);
+    if (format == ItkFormat::Tiff) {
+        check_tiff_entries(path);
+        check_tiff_pages(path);
+    }
     if (format == ItkFormat::DicomFile) check_dicom_meta(path);
     if (format == ItkFormat::VtkImage) check_vtk_image_header(path);
     if (format == ItkFormat::Hdf5) check_hdf5_voxel_data(path);

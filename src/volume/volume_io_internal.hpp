@@ -310,6 +310,9 @@ void read_itk_voxels(const std::string& path, ItkFormat format, const VolumeLimi
 /// size, the bits and samples per pixel, the sample format, the planar layout and the subfile
 /// type of the first: ITK's reader assumes so (tiff_pages.cpp).
 void check_tiff_pages(const std::string& path);
+/// Throws (naming the file and the directory) where a TIFF directory entry counts more values than
+/// the file holds at their offset: ITK's libtiff allocates them first (tiff_entries.cpp).
+void check_tiff_entries(const std::string& path);
 /// Throws (naming the file) where the DICOM file meta information (group 0002 after the "DICM"
 /// preamble) ends before its elements do, names no value representation, or is all the file
 /// holds: Debian's GDCM asserts on those instead of failing (dicom_meta.cpp); or where an element
