@@ -529,6 +529,9 @@ TEST(MedicalIo, DicomMetaInformationThatEndsEarlyIsRefusedBeforeGdcmReadsIt) {
     std::memcpy(&long_element[meta_end + 4], &huge, 4);
     write_bytes(damaged.path("long-element.dcm"), long_element);
     expect_refused(damaged.path("long-element.dcm"), "announces 1879048192 bytes, but the file holds");
+    // GDCM asserted on a file cut inside the header (tag, length) of an element of its data set.
+    write_bytes(damaged.path("cut-element.dcm"), bytes + std::string("\x10\x00\x10", 3));
+    expect_refused(damaged.path("cut-element.dcm"), "the file ends inside a data element's header (3 bytes after the last element)");
     // In a series folder, GDCM reads every file: one cut file is named.
     write_bytes(scratch.path(slices[1]), bytes.substr(0, meta_end - 3));
     expect_refused(scratch.path(slices[1]), "the file ends inside its DICOM meta information");

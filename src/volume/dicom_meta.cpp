@@ -100,6 +100,8 @@ void check_data_set_lengths(InputFile& file, std::uint64_t at, const std::string
                       " bytes, but the file holds " + std::to_string(size - std::min(at, size)) + " after it");
         at += length;
     }
+    if (at < size)  // GDCM asserted on an element cut inside its tag or length (found by fuzzing)
+        file.fail("the file ends inside a data element's header (" + std::to_string(size - at) + " bytes after the last element)");
 }
 
 void check_dicom_meta(const std::string& path) {
