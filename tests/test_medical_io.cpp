@@ -460,7 +460,11 @@ TEST(MedicalIo, VtkImageHeaderLinesAreCheckedBeforeItkReadsThem) {
     two.erase(second, bytes.find('\n', spacing + 1) - second);  // "SPACING x"
     two.insert(second, " 1");
     write_bytes(scratch.path("two.vtk"), two);
-    expect_refused(scratch.path("two.vtk"), "('SPACING') gives 2 values, not 3");
+    expect_refused(scratch.path("two.vtk"), "('SPACING', read as spacing) gives 2 values, not 3");
+    std::string run_into = bytes;  // "SPACINGx0.75 ...": ITK skips the first word, number included
+    run_into[spacing + 8] = 'x';
+    write_bytes(scratch.path("run-into.vtk"), run_into);
+    expect_refused(scratch.path("run-into.vtk"), "read as spacing) gives 2 values, not 3");
     // ITK's reader took a binary payload cut short without a word (the last voxels unset).
     write_bytes(scratch.path("short.vtk"), bytes.substr(0, bytes.size() - 5));
     expect_refused(scratch.path("short.vtk"), "truncated payload: the header says 224 voxels of 1 bytes = 224 bytes");

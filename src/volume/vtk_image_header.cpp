@@ -1,9 +1,10 @@
 // dsreg — the header of a legacy VTK image (DATASET STRUCTURED_POINTS), checked before ITK reads it.
 //
 // ITK's reader (5.2) scans each header line as a C string: a line cut by a NUL byte
-// ("SPACING 7.5\0...") left the other spacings unset, taken from uninitialized memory, so two
-// reads of one file gave two grids (found by fuzzing). So the header lines (all but the title)
-// must be text, and DIMENSIONS, SPACING (or ASPECT_RATIO) and ORIGIN must give three numbers;
+// ("SPACING 7.5\0...") or a keyword run into its first number ("SPACINGz7.5 ...") left spacings
+// unset, taken from uninitialized memory, so two reads of one file gave two grids (both found by
+// fuzzing). So the header lines (all but the title) must be text, and a line ITK takes for
+// DIMENSIONS, SPACING (or ASPECT_RATIO) or ORIGIN must give three numbers after its first word;
 // POINT_DATA must count the voxels, and a binary payload must hold them (check_payload).
 #include <cmath>
 #include <optional>
@@ -27,10 +28,18 @@ bool is_text(const std::string& line) {
     return true;
 }
 
+/// The geometry keyword ITK finds in a header line: it looks for each anywhere in the line (in
+/// this order), then reads the three numbers after the line's first word.
+const char* geometry_keyword(const std::string& lower_line) {
+    for (const char* keyword : {"dimensions", "spacing", "aspect_ratio", "origin"})
+        if (lower_line.find(keyword) != std::string::npos) return keyword;
+    return nullptr;
+}
+
 /// DIMENSIONS: three positive integers; SPACING, ASPECT_RATIO, ORIGIN: three finite numbers.
 void check_geometry_line(const InputFile& file, std::int64_t number, const std::string& keyword,
                          const std::vector<std::string>& words) {
-    const std::string where = "header line " + std::to_string(number) + " ('" + words[0] + "')";
+    const std::string where = "header line " + std::to_string(number) + " ('" + words[0] + "', read as " + keyword + ")";
     if (words.size() != 4) file.fail(where + " gives " + std::to_string(words.size() - 1) + " values, not 3");
     for (std::size_t w = 1; w < 4; ++w) {
         std::int64_t size = 0;
@@ -96,9 +105,9 @@ void check_vtk_image_header(const std::string& path) {
         if (!is_text(line)) file.fail("header line " + std::to_string(number) + " holds control characters (a NUL byte?)");
         const std::vector<std::string> words = split_words(line);
         if (words.empty()) continue;
-        const std::string keyword = to_lower(words[0]);
-        if (keyword == "dimensions" || keyword == "spacing" || keyword == "aspect_ratio" || keyword == "origin")
-            check_geometry_line(file, number, keyword, words);
+        const char* geometry = geometry_keyword(to_lower(line));
+        if (geometry != nullptr) check_geometry_line(file, number, geometry, words);
+        const std::string keyword = geometry != nullptr ? geometry : to_lower(words[0]);
         note_line(keyword, words, header);
         if (keyword == "lookup_table") return check_payload(file, header);  // the voxels follow
     }
