@@ -28,7 +28,7 @@ if [[ ${SKIP_BUILD:-0} != 1 ]]; then
     echo "fuzz: build $((SECONDS - start)) s"
 fi
 
-# Leaks of third-party libraries (ITK's niftilib) are suppressed; dsreg's own are findings.
+# Leaks of third-party libraries (fuzz/lsan-suppressions.txt: ITK, HDF5) are suppressed; dsreg's own are findings.
 export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/fuzz/lsan-suppressions.txt}
 rm -rf "$build/seeds"
 "$build/fuzz/dsreg_fuzz_seeds" "$build/seeds" >/dev/null

@@ -43,7 +43,7 @@ echo "sanitize: build of the tests $((SECONDS - start)) s"
 
 start=$SECONDS
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-export LSAN_OPTIONS=suppressions=$PWD/fuzz/lsan-suppressions.txt  # third-party leaks only (ITK's niftilib and NrrdIO)
+export LSAN_OPTIONS=suppressions=$PWD/fuzz/lsan-suppressions.txt  # third-party leaks only (ITK's niftilib, NrrdIO and TIFF reader; HDF5)
 ctest --test-dir "$build" --output-on-failure -j"$(nproc)" --timeout 900 \
     -E "${SANITIZE_EXCLUDE:-^(Solvers\.|ClampedRegularization\.ReDigitizes|viewer_browser$)}"
 echo "sanitize: tests $((SECONDS - start)) s"
