@@ -468,6 +468,13 @@ TEST(MedicalIo, VtkImageHeaderLinesAreCheckedBeforeItkReadsThem) {
     // ITK's reader took a binary payload cut short without a word (the last voxels unset).
     write_bytes(scratch.path("short.vtk"), bytes.substr(0, bytes.size() - 5));
     expect_refused(scratch.path("short.vtk"), "truncated payload: the header says 224 voxels of 1 bytes = 224 bytes");
+    // ITK finds SCALARS anywhere in the line, so a garbled keyword still gives it the type.
+    std::string garbled = bytes.substr(0, bytes.size() - 5);
+    const std::size_t scalars = garbled.find("SCALARS scalars");
+    ASSERT_NE(scalars, std::string::npos);
+    garbled[scalars + 3] = '*';
+    write_bytes(scratch.path("garbled.vtk"), garbled);
+    expect_refused(scratch.path("garbled.vtk"), "truncated payload: the header says 224 voxels");
 }
 
 TEST(MedicalIo, DamagedHdf5IsAnErrorNotACrash) {

@@ -68,16 +68,23 @@ int vtk_type_bytes(const std::string& type) {
     return 0;
 }
 
-void note_line(const std::string& keyword, const std::vector<std::string>& words, VtkImageHeader& header) {
-    std::int64_t number = 0;
-    if (keyword == "binary") header.binary = true;
-    if (keyword == "dimensions") {
+/// What ITK takes from a header line: it looks for each keyword anywhere in the (lower-case)
+/// line, and reads the words after the first ("SCAM-*ARS scalars short 1" has short scalars).
+void note_line(std::int64_t number, const std::string& lower_line, const std::vector<std::string>& words,
+               VtkImageHeader& header) {
+    const auto has = [&](const char* keyword) { return lower_line.find(keyword) != std::string::npos; };
+    std::int64_t value = 0;
+    if (number == 3) header.binary = !has("ascii") && has("binary");
+    if (has("dimensions")) {
         header.voxels = 1;
-        for (std::size_t w = 1; w < 4; ++w) header.voxels = parse_integer(words[w], number) && number < (1 << 20) ? header.voxels * number : -1;
+        for (std::size_t w = 1; w < 4; ++w)
+            header.voxels = parse_integer(words[w], value) && value < (1 << 20) ? header.voxels * value : -1;
+    } else if (has("point_data") && words.size() == 2 && parse_integer(words[1], value)) {
+        header.point_data = value;
+    } else if (has("scalars") && words.size() >= 3) {
+        header.value_bytes = vtk_type_bytes(to_lower(words[2]));
+        if (words.size() >= 4 && parse_integer(words[3], value)) header.components = value;
     }
-    if (keyword == "point_data" && words.size() == 2 && parse_integer(words[1], number)) header.point_data = number;
-    if (keyword == "scalars" && words.size() >= 3) header.value_bytes = vtk_type_bytes(to_lower(words[2]));
-    if (keyword == "scalars" && words.size() >= 4 && parse_integer(words[3], number)) header.components = number;
 }
 
 /// POINT_DATA counts the voxels, and a binary payload holds them all: ITK's reader took a
@@ -105,11 +112,10 @@ void check_vtk_image_header(const std::string& path) {
         if (!is_text(line)) file.fail("header line " + std::to_string(number) + " holds control characters (a NUL byte?)");
         const std::vector<std::string> words = split_words(line);
         if (words.empty()) continue;
-        const char* geometry = geometry_keyword(to_lower(line));
-        if (geometry != nullptr) check_geometry_line(file, number, geometry, words);
-        const std::string keyword = geometry != nullptr ? geometry : to_lower(words[0]);
-        note_line(keyword, words, header);
-        if (keyword == "lookup_table") return check_payload(file, header);  // the voxels follow
+        const std::string lower_line = to_lower(line);
+        if (const char* geometry = geometry_keyword(lower_line)) check_geometry_line(file, number, geometry, words);
+        note_line(number, lower_line, words, header);
+        if (to_lower(words[0]) == "lookup_table") return check_payload(file, header);  // the voxels follow
     }
 }
 
