@@ -540,6 +540,13 @@ TEST(MedicalIo, DicomMetaInformationThatEndsEarlyIsRefusedBeforeGdcmReadsIt) {
     std::memcpy(&long_element[meta_end + 4], &huge, 4);
     write_bytes(damaged.path("long-element.dcm"), long_element);
     expect_refused(damaged.path("long-element.dcm"), "announces 1879048192 bytes, but the file holds");
+    // GDCM asserts on Samples per Pixel other than 1, 3 or 4 (implicit VR: tag, length 2, value).
+    std::string samples = bytes;
+    const std::size_t spp = samples.find(std::string("\x28\x00\x02\x00\x02\x00\x00\x00", 8), meta_end);
+    ASSERT_NE(spp, std::string::npos);
+    samples[spp + 8] = 2;
+    write_bytes(damaged.path("samples.dcm"), samples);
+    expect_refused(damaged.path("samples.dcm"), "Samples per Pixel (0028,0002) is 2 (DICOM allows 1, 3 or 4)");
     // GDCM asserted on a file cut inside the header (tag, length) of an element of its data set.
     write_bytes(damaged.path("cut-element.dcm"), bytes + std::string("\x10\x00\x10", 3));
     expect_refused(damaged.path("cut-element.dcm"), "the file ends inside a data element's header (3 bytes after the last element)");

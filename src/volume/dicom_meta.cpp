@@ -67,6 +67,19 @@ std::uint64_t unsigned_at(const std::string& bytes, std::size_t first, std::size
     return value;
 }
 
+/// GDCM asserts on values it takes for impossible: Samples per Pixel (0028,0002) other than 1,
+/// 3 or 4 aborted the process (found by fuzzing).
+void check_element_value(InputFile& file, std::uint64_t group, std::uint64_t element, std::uint64_t at,
+                         std::uint64_t length, bool big_endian) {
+    if (group != 0x0028 || element != 0x0002 || length != 2) return;
+    std::string value(2, '\0');
+    file.seek(at);
+    if (file.read(reinterpret_cast<std::uint8_t*>(value.data()), 2) != 2) return;
+    const std::uint64_t samples = unsigned_at(value, 0, 2, big_endian);
+    if (samples != 1 && samples != 3 && samples != 4)
+        file.fail("Samples per Pixel (0028,0002) is " + std::to_string(samples) + " (DICOM allows 1, 3 or 4)");
+}
+
 /// The data set after the meta information, walked element by element in its transfer syntax
 /// (top level, and inside sequences and items of undefined length): every value must fit in
 /// the file. GDCM allocates what an element's length says before reading it (an element of
@@ -98,6 +111,7 @@ void check_data_set_lengths(InputFile& file, std::uint64_t at, const std::string
         if (length > size - std::min(at, size))
             file.fail("data element (" + hex4(group) + "," + hex4(element) + ") announces " + std::to_string(length) +
                       " bytes, but the file holds " + std::to_string(size - std::min(at, size)) + " after it");
+        check_element_value(file, group, element, at, length, big_endian);
         at += length;
     }
     if (at < size)  // GDCM asserted on an element cut inside its tag or length (found by fuzzing)
