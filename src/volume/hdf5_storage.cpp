@@ -3,13 +3,13 @@
 //
 // HDF5 allocates a chunk as its index says it is stored, and decodes it into a buffer of the
 // chunk's dimensions: a chunk index claiming 1.6 GB in a 13 KB file made HDF5 allocate that much
-// (found by fuzzing). So the storage the data set claims must fit in the file, and its chunks
-// must not be larger than the data set. HDF5 prints its error stack on stderr by default; dsreg
-// turns it off (its own messages, and ITK's, name the file).
+// (found by fuzzing). So the storage the data set claims must fit in the file, and a chunk must
+// be no larger than the file could hold compressed. HDF5 prints its error stack on stderr by
+// default; dsreg turns it off (its own messages, and ITK's, name the file).
 #include <hdf5.h>
 
+#include <cstdint>
 #include <string>
-#include <vector>
 
 #include "volume_io_internal.hpp"
 
@@ -34,19 +34,23 @@ private:
     herr_t (*close_)(hid_t);
 };
 
-/// Chunks no larger than the data set along any axis.
-void check_chunks(const InputFile& file, hid_t data_set, hid_t space) {
+/// `a` * `b`, or the largest value where that overflows.
+std::uint64_t saturated_product(std::uint64_t a, std::uint64_t b) {
+    return b != 0 && a > UINT64_MAX / b ? UINT64_MAX : a * b;
+}
+
+/// A chunk that the whole file could not hold even compressed is refused: HDF5 allocates it.
+void check_chunks(const InputFile& file, hid_t data_set) {
     const Handle properties(H5Dget_create_plist(data_set), H5Pclose);
-    if (!properties.valid() || H5Pget_layout(properties.id()) != H5D_CHUNKED) return;
-    const int rank = H5Sget_simple_extent_ndims(space);
-    if (rank < 1 || rank > 32) return;
-    std::vector<hsize_t> dims(static_cast<std::size_t>(rank)), chunk(static_cast<std::size_t>(rank));
-    if (H5Sget_simple_extent_dims(space, dims.data(), nullptr) != rank || H5Pget_chunk(properties.id(), rank, chunk.data()) != rank)
-        return;
-    for (std::size_t d = 0; d < dims.size(); ++d)
-        if (chunk[d] > dims[d])
-            file.fail("the voxel data set is stored in chunks of " + std::to_string(chunk[d]) + " values along axis " +
-                      std::to_string(d + 1) + ", where it holds " + std::to_string(dims[d]));
+    const Handle type(H5Dget_type(data_set), H5Tclose);
+    if (!properties.valid() || !type.valid() || H5Pget_layout(properties.id()) != H5D_CHUNKED) return;
+    hsize_t chunk[H5S_MAX_RANK];
+    const int rank = H5Pget_chunk(properties.id(), H5S_MAX_RANK, chunk);
+    std::uint64_t bytes = H5Tget_size(type.id());
+    for (int d = 0; d < rank; ++d) bytes = saturated_product(bytes, chunk[d]);
+    if (bytes > max_inflated_size(file.size()))
+        file.fail("the voxel data set is stored in chunks of " + std::to_string(bytes) + " bytes, more than the " +
+                  std::to_string(file.size()) + "-byte file can hold even compressed");
 }
 
 }  // namespace
@@ -62,8 +66,7 @@ void check_hdf5_voxel_data(const std::string& path) {
     if (stored > file.size())
         file.fail("the voxel data set claims " + std::to_string(stored) + " bytes of storage, but the file holds " +
                   std::to_string(file.size()));
-    const Handle space(H5Dget_space(data_set.id()), H5Sclose);
-    if (space.valid()) check_chunks(file, data_set.id(), space.id());
+    check_chunks(file, data_set.id());
 }
 
 }  // namespace dsreg::volume_io_detail

@@ -323,7 +323,7 @@ void check_dicom_meta(const std::string& path);
 /// and three numbers on each geometry line. Throws naming the file and the line.
 void check_vtk_image_header(const std::string& path);
 /// Throws (naming the file) where the voxel data set of an HDF5 image as ITK writes it claims
-/// more storage than the file holds, or chunks larger than itself: HDF5 allocates what they say
+/// more storage than the file holds, or chunks it could not hold compressed: HDF5 allocates them
 /// (hdf5_storage.cpp). Files HDF5 cannot open are left to ITK's reader.
 void check_hdf5_voxel_data(const std::string& path);
 void read_dicom_series_voxels(const std::string& folder, const VolumeLimits& limits, VoxelDestination& destination);
