@@ -113,9 +113,9 @@ void check_vtk_image_header(const std::string& path) {
         const std::vector<std::string> words = split_words(line);
         if (words.empty()) continue;
         const std::string lower_line = to_lower(line);
+        if (to_lower(words[0]) == "lookup_table") return check_payload(file, header);  // the voxels follow
         if (const char* geometry = geometry_keyword(lower_line)) check_geometry_line(file, number, geometry, words);
         note_line(number, lower_line, words, header);
-        if (to_lower(words[0]) == "lookup_table") return check_payload(file, header);  // the voxels follow
     }
 }
 
