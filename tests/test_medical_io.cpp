@@ -547,6 +547,17 @@ TEST(MedicalIo, DicomMetaInformationThatEndsEarlyIsRefusedBeforeGdcmReadsIt) {
     samples[spp + 8] = 2;
     write_bytes(damaged.path("samples.dcm"), samples);
     expect_refused(damaged.path("samples.dcm"), "Samples per Pixel (0028,0002) is 2 (DICOM allows 1, 3 or 4)");
+    // Pixel Data short of what Rows x Columns x Bits Allocated say: GDCM and ITK read the rest from
+    // memory never written. Here the file loses its last 2 bytes and its Pixel Data's length 2.
+    std::string short_pixels = bytes.substr(0, bytes.size() - 2);
+    const std::size_t pixel_data = short_pixels.rfind(std::string("\xe0\x7f\x10\x00", 4));
+    ASSERT_NE(pixel_data, std::string::npos);
+    std::uint32_t pixel_bytes = 0;
+    std::memcpy(&pixel_bytes, &short_pixels[pixel_data + 4], 4);
+    pixel_bytes -= 2;
+    std::memcpy(&short_pixels[pixel_data + 4], &pixel_bytes, 4);
+    write_bytes(damaged.path("short-pixels.dcm"), short_pixels);
+    expect_refused(damaged.path("short-pixels.dcm"), "Pixel Data (7FE0,0010) holds 178 bytes, but 9 rows x 10 columns x 1 frames");
     // GDCM asserted on a file cut inside the header (tag, length) of an element of its data set.
     write_bytes(damaged.path("cut-element.dcm"), bytes + std::string("\x10\x00\x10", 3));
     expect_refused(damaged.path("cut-element.dcm"), "the file ends inside a data element's header (3 bytes after the last element)");

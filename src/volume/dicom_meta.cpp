@@ -10,8 +10,10 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 
+#include "dsreg/text.hpp"
 #include "volume_io_internal.hpp"
 
 namespace dsreg::volume_io_detail {
@@ -67,17 +69,56 @@ std::uint64_t unsigned_at(const std::string& bytes, std::size_t first, std::size
     return value;
 }
 
-/// GDCM asserts on values it takes for impossible: Samples per Pixel (0028,0002) other than 1,
-/// 3 or 4 aborted the process (found by fuzzing).
-void check_element_value(InputFile& file, std::uint64_t group, std::uint64_t element, std::uint64_t at,
-                         std::uint64_t length, bool big_endian) {
-    if (group != 0x0028 || element != 0x0002 || length != 2) return;
-    std::string value(2, '\0');
+/// The image pixel module of the data set's top level, as far as the walk has read it.
+struct PixelModule {
+    std::uint64_t rows = 0, columns = 0, frames = 1, samples = 1, bits = 0;
+    std::uint64_t pixel_bytes = 0;  ///< the length of a native Pixel Data element
+    bool native_pixels = false;
+};
+
+std::string value_at(InputFile& file, std::uint64_t at, std::uint64_t length) {
+    std::string value(static_cast<std::size_t>(length), '\0');
     file.seek(at);
-    if (file.read(reinterpret_cast<std::uint8_t*>(value.data()), 2) != 2) return;
-    const std::uint64_t samples = unsigned_at(value, 0, 2, big_endian);
-    if (samples != 1 && samples != 3 && samples != 4)
-        file.fail("Samples per Pixel (0028,0002) is " + std::to_string(samples) + " (DICOM allows 1, 3 or 4)");
+    if (file.read(reinterpret_cast<std::uint8_t*>(value.data()), value.size()) != value.size()) value.clear();
+    return value;
+}
+
+/// Notes the pixel module's elements (top level: an icon sequence has its own). GDCM asserts on
+/// Samples per Pixel other than 1, 3 or 4 (an abort, found by fuzzing).
+void note_element(InputFile& file, std::uint64_t tag, std::uint64_t at, std::uint64_t length, bool big_endian,
+                  PixelModule& pixels) {
+    if (tag == 0x7fe00010) {
+        pixels.native_pixels = true;
+        pixels.pixel_bytes = length;
+    }
+    if (tag == 0x00280008 && length <= 12) {  // Number of Frames, a decimal string
+        const std::optional<double> frames = parse_whole_number(trimmed_uid(value_at(file, at, length)));
+        if (frames && *frames >= 1 && *frames < 1e9) pixels.frames = static_cast<std::uint64_t>(*frames);
+    }
+    if (length != 2 || (tag != 0x00280002 && tag != 0x00280010 && tag != 0x00280011 && tag != 0x00280100)) return;
+    const std::string value = value_at(file, at, 2);
+    if (value.size() != 2) return;
+    const std::uint64_t number = unsigned_at(value, 0, 2, big_endian);
+    if (tag == 0x00280002 && number != 1 && number != 3 && number != 4)
+        file.fail("Samples per Pixel (0028,0002) is " + std::to_string(number) + " (DICOM allows 1, 3 or 4)");
+    if (tag == 0x00280002) pixels.samples = number;
+    if (tag == 0x00280010) pixels.rows = number;
+    if (tag == 0x00280011) pixels.columns = number;
+    if (tag == 0x00280100) pixels.bits = number;
+}
+
+/// Native (not encapsulated) pixel data must hold what the pixel module says: GDCM and ITK read
+/// a short one without a word, the missing voxels from memory never written (two reads of one
+/// file differed; found by fuzzing).
+void check_pixel_bytes(const InputFile& file, const PixelModule& pixels) {
+    if (!pixels.native_pixels || pixels.bits == 0 || pixels.bits % 8 != 0) return;
+    const double needed = double(pixels.rows) * double(pixels.columns) * double(pixels.frames) * double(pixels.samples) *
+                          double(pixels.bits / 8);
+    if (needed > double(pixels.pixel_bytes))
+        file.fail("Pixel Data (7FE0,0010) holds " + std::to_string(pixels.pixel_bytes) + " bytes, but " +
+                  std::to_string(pixels.rows) + " rows x " + std::to_string(pixels.columns) + " columns x " +
+                  std::to_string(pixels.frames) + " frames x " + std::to_string(pixels.samples) + " samples of " +
+                  std::to_string(pixels.bits) + " bits need " + format("%.0f", needed));
 }
 
 /// The data set after the meta information, walked element by element in its transfer syntax
@@ -92,6 +133,8 @@ void check_data_set_lengths(InputFile& file, std::uint64_t at, const std::string
     if (transfer_syntax == "1.2.840.10008.1.2.1.99") return;  // deflated
     const std::uint64_t size = file.size();
     std::string head(12, '\0');
+    PixelModule pixels;
+    int depth = 0;  // of the sequences and items of undefined length open
     while (at + 8 <= size) {
         file.seek(at);
         const std::size_t got = file.read(reinterpret_cast<std::uint8_t*>(head.data()), 12);
@@ -107,13 +150,19 @@ void check_data_set_lengths(InputFile& file, std::uint64_t at, const std::string
             length = unsigned_at(head, 6, 2, big_endian);
         }
         at += header;
-        if (length == 0xffffffffu) continue;  // undefined length: its elements follow
+        const std::uint64_t tag = group << 16 | element;
+        if (tag == 0xfffee00d || tag == 0xfffee0dd) depth -= depth > 0 ? 1 : 0;  // an item's or a sequence's end
+        if (length == 0xffffffffu) {  // undefined length: its elements follow
+            depth += 1;
+            continue;
+        }
         if (length > size - std::min(at, size))
             file.fail("data element (" + hex4(group) + "," + hex4(element) + ") announces " + std::to_string(length) +
                       " bytes, but the file holds " + std::to_string(size - std::min(at, size)) + " after it");
-        check_element_value(file, group, element, at, length, big_endian);
+        if (depth == 0) note_element(file, tag, at, length, big_endian, pixels);
         at += length;
     }
+    check_pixel_bytes(file, pixels);
     if (at < size)  // GDCM asserted on an element cut inside its tag or length (found by fuzzing)
         file.fail("the file ends inside a data element's header (" + std::to_string(size - at) + " bytes after the last element)");
 }
