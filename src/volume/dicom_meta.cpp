@@ -51,8 +51,6 @@ std::string hex4(std::uint64_t number) {
 /// "(0002,xxxx)", as DICOM names its tags.
 std::string element_name(std::uint64_t element) { return "(0002," + hex4(element) + ")"; }
 
-}  // namespace
-
 /// A UID as stored: without its padding (a NUL or a space to an even length).
 std::string trimmed_uid(std::string uid) {
     while (!uid.empty() && (uid.back() == '\0' || uid.back() == ' ')) uid.pop_back();
@@ -166,6 +164,8 @@ void check_data_set_lengths(InputFile& file, std::uint64_t at, const std::string
     if (at < size)  // GDCM asserted on an element cut inside its tag or length (found by fuzzing)
         file.fail("the file ends inside a data element's header (" + std::to_string(size - at) + " bytes after the last element)");
 }
+
+}  // namespace
 
 void check_dicom_meta(const std::string& path) {
     InputFile file(path);
