@@ -271,7 +271,7 @@ void add_block_flags(CLI::App& command, RegularizeCommand& c) {
         ->delimiter(',')
         ->expected(1, 3);
     command.add_option("--block-halo", c.options.blocks.halo,
-                       "Halo of each block, voxels (default: from --alpha and --beta, about 2.5 sqrt(beta/alpha))");
+                       "Halo of each block, voxels (default: 2 sqrt(beta/alpha) + 2, from --alpha and --beta)");
     command.add_option("--schwarz-sweeps", c.options.blocks.schwarz_sweeps,
                        "Overlapping Schwarz sweeps after the first block-wise pass: each brings the mesh closer to the "
                        "whole-volume solve")

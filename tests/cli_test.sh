@@ -176,7 +176,7 @@ summary=$("$DSREG" regularize --shape leopold --h 0.5 -o "$work/leo.obj" --repor
 check "default run repairs" grep -q "repaired [0-9]* intersecting triangle pairs, [0-9]* folded faces in [0-9]* rounds" <<<"$summary"
 check "report: invalid as solved, valid as written" python3 -c "import json,sys; v=json.load(open(sys.argv[1]))['validity']; sys.exit(0 if v['repair'] and not v['before']['valid'] and v['after']['valid'] and v['rounds'] > 0 and v['after']['intersecting_pairs'] == 0 else 1)" "$work/leo.json"
 summary=$("$DSREG" regularize --shape leopold --h 0.5 -o "$work/leo2.obj" --no-repair --report "$work/leo2.json" 2>&1)
-check "--no-repair counts" grep -q "[1-9][0-9]* intersecting triangle pairs, [0-9]* folded faces (not repaired)" <<<"$summary"
+check "--no-repair counts" grep -Eq "([1-9][0-9]* intersecting triangle pairs, [0-9]*|[0-9]* intersecting triangle pairs, [1-9][0-9]*) folded faces \(not repaired\)" <<<"$summary"
 check "--no-repair report" python3 -c "import json,sys; v=json.load(open(sys.argv[1]))['validity']; sys.exit(0 if not v['repair'] and v['rounds'] == 0 and not v['after']['valid'] else 1)" "$work/leo2.json"
 "$DSREG" regularize --shape leopold --h 0.5 -o "$work/leo3.obj" --no-check --report "$work/leo3.json" -q
 check "--no-check: no validity in the report" grep -q '"validity": null' "$work/leo3.json"

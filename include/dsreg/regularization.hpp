@@ -28,7 +28,7 @@
 namespace dsreg {
 
 struct RegularizationWeights {
-    double alpha = 1e-3;  ///< data attachment
+    double alpha = 1e-3;  ///< data attachment (the paper's; the pipeline's default is PipelineOptions::alpha)
     double beta = 1.0;    ///< normal alignment
     double gamma = 1e-2;  ///< fairness
     Eigen::VectorXd vertex_weights;  ///< diagonal of W0 (one per vertex, > 0), empty = identity

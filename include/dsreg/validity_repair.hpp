@@ -2,7 +2,7 @@
 // folded against the field u (the definition is in mesh_validity.hpp; docs/validity.md has the
 // method and the measurements).
 //
-// Why meshes go wrong. The data term of eq. (1) is weak (α = 1e-3 against β = 1), so vertices
+// Why meshes go wrong. The data term of eq. (1) is weak (α = 3e-3 by default against β = 1), so vertices
 // slide along the surface, often by more than a voxel, wherever that helps the alignment; where u
 // varies quickly (noise, high curvature, parts thinner than the integral-invariant ball, where u
 // is wrong and may even point into the object) neighbouring faces slide over each other, turn
