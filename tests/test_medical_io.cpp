@@ -475,6 +475,11 @@ TEST(MedicalIo, VtkImageHeaderLinesAreCheckedBeforeItkReadsThem) {
     garbled[scalars + 3] = '*';
     write_bytes(scratch.path("garbled.vtk"), garbled);
     expect_refused(scratch.path("garbled.vtk"), "truncated payload: the header says 224 voxels");
+    // ITK steps back when the line after SCALARS is not LOOKUP_TABLE: that line is payload.
+    std::string no_table = bytes.substr(0, bytes.size() - 30);
+    no_table[no_table.find("LOOKUP_TABLE")] = 'X';
+    write_bytes(scratch.path("no-table.vtk"), no_table);
+    expect_refused(scratch.path("no-table.vtk"), "truncated payload: the header says 224 voxels");
 }
 
 TEST(MedicalIo, DamagedHdf5IsAnErrorNotACrash) {

@@ -5,7 +5,8 @@
 // unset, taken from uninitialized memory, so two reads of one file gave two grids (both found by
 // fuzzing). So the header lines (all but the title) must be text, and a line ITK takes for
 // DIMENSIONS, SPACING (or ASPECT_RATIO) or ORIGIN must give three numbers after its first word;
-// POINT_DATA must count the voxels, and a binary payload must hold them (check_payload).
+// POINT_DATA must count the voxels, and a binary payload must hold them (check_payload) from
+// where ITK's header ends (check_after_scalars).
 #include <cmath>
 #include <optional>
 #include <string>
@@ -101,6 +102,17 @@ void check_payload(const InputFile& file, const VtkImageHeader& header) {
                   " bytes, the file holds " + std::to_string(file.remaining()) + " after the header");
 }
 
+/// Where ITK's header ends: after the SCALARS line, or after the next one if it holds
+/// LOOKUP_TABLE (ITK reads that line, and steps back unless it does: a garbled one found by
+/// fuzzing was payload). Then checks the payload from there.
+void check_after_scalars(InputFile& file, const VtkImageHeader& header) {
+    const std::uint64_t payload = file.position();
+    std::string next;
+    for (int c = file.get(); c != -1 && c != '\n' && next.size() < 1024; c = file.get()) next.push_back(static_cast<char>(c));
+    if (to_lower(next).find("lookup_table") == std::string::npos) file.seek(payload);
+    check_payload(file, header);
+}
+
 }  // namespace
 
 void check_vtk_image_header(const std::string& path) {
@@ -113,9 +125,9 @@ void check_vtk_image_header(const std::string& path) {
         const std::vector<std::string> words = split_words(line);
         if (words.empty()) continue;
         const std::string lower_line = to_lower(line);
-        if (to_lower(words[0]) == "lookup_table") return check_payload(file, header);  // the voxels follow
         if (const char* geometry = geometry_keyword(lower_line)) check_geometry_line(file, number, geometry, words);
         note_line(number, lower_line, words, header);
+        if (lower_line.find("scalars") != std::string::npos) return check_after_scalars(file, header);
     }
 }
 
