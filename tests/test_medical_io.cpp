@@ -563,6 +563,11 @@ TEST(MedicalIo, DicomMetaInformationThatEndsEarlyIsRefusedBeforeGdcmReadsIt) {
     std::memcpy(&short_pixels[pixel_data + 4], &pixel_bytes, 4);
     write_bytes(damaged.path("short-pixels.dcm"), short_pixels);
     expect_refused(damaged.path("short-pixels.dcm"), "Pixel Data (7FE0,0010) holds 178 bytes, but 9 rows x 10 columns x 1 frames");
+    // Without meta information after the preamble GDCM guesses the encoding (and misread one).
+    std::string group_3 = bytes;
+    group_3[132] = 3;
+    write_bytes(damaged.path("group-3.dcm"), group_3);
+    expect_refused(damaged.path("group-3.dcm"), "the DICM preamble is not followed by DICOM meta information");
     // GDCM asserted on a file cut inside the header (tag, length) of an element of its data set.
     write_bytes(damaged.path("cut-element.dcm"), bytes + std::string("\x10\x00\x10", 3));
     expect_refused(damaged.path("cut-element.dcm"), "the file ends inside a data element's header (3 bytes after the last element)");
