@@ -71,11 +71,9 @@ int vtk_type_bytes(const std::string& type) {
 
 /// What ITK takes from a header line: it looks for each keyword anywhere in the (lower-case)
 /// line, and reads the words after the first ("SCAM-*ARS scalars short 1" has short scalars).
-void note_line(std::int64_t number, const std::string& lower_line, const std::vector<std::string>& words,
-               VtkImageHeader& header) {
+void note_line(const std::string& lower_line, const std::vector<std::string>& words, VtkImageHeader& header) {
     const auto has = [&](const char* keyword) { return lower_line.find(keyword) != std::string::npos; };
     std::int64_t value = 0;
-    if (number == 3) header.binary = !has("ascii") && has("binary");
     if (has("dimensions")) {
         header.voxels = 1;
         for (std::size_t w = 1; w < 4; ++w)
@@ -125,8 +123,11 @@ void check_vtk_image_header(const std::string& path) {
         const std::vector<std::string> words = split_words(line);
         if (words.empty()) continue;
         const std::string lower_line = to_lower(line);
+        header.binary = number == 3 ? lower_line.find("ascii") == std::string::npos && lower_line.find("binary") != std::string::npos
+                                    : header.binary;
+        if (number < 5) continue;  // the version, the file type and the data set line: ITK reads no keyword there
         if (const char* geometry = geometry_keyword(lower_line)) check_geometry_line(file, number, geometry, words);
-        note_line(number, lower_line, words, header);
+        note_line(lower_line, words, header);
         if (lower_line.find("scalars") != std::string::npos) return check_after_scalars(file, header);
     }
 }
