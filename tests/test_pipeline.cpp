@@ -45,7 +45,8 @@ TEST(Pipeline, EqualsTheStagesCalledByHand) {
     EXPECT_DOUBLE_EQ(adaptive.max_radius, 14.0);  // voxels of a file
     const AdaptiveNormalField field = adaptive_integral_invariant_normals(loaded.volume, surface, adaptive);
     RegularizationWeights weights;
-    weights.alpha = options.alpha;  // the pipeline's default (docs/accuracy.md), not the paper's
+    weights.alpha = options.alpha;  // the pipeline's defaults (docs/accuracy.md), not the paper's
+    weights.gamma = options.gamma;
     weights.vertex_alpha = thin_part_alpha(surface, field.reach.smallest(), 12.0);
     SolverOptions solver;
     solver.kind = SolverKind::Cholmod;
@@ -79,12 +80,13 @@ TEST(Pipeline, RoundOffOfTheSpacingMovesTheMeshByRoundOffOnly) {
 }
 
 TEST(Pipeline, FixedRadiusAndNoCorrectionsIsThePapersPipeline) {
-    // --radius 5 --alpha-reach 0 --shrink-correction 0 --alpha 1e-3: integral invariants of one
-    // radius and the paper's energy with its weights, nothing else.
+    // --radius 5 --alpha-reach 0 --shrink-correction 0 --alpha 1e-3 --gamma 1e-2: integral
+    // invariants of one radius and the paper's energy with its weights, nothing else.
     const LoadedVolume loaded = loaded_ball();
     PipelineOptions options;
     options.solver = SolverKind::Cholmod;
     options.alpha = RegularizationWeights{}.alpha;
+    options.gamma = RegularizationWeights{}.gamma;
     options.normals.radius = 5.0;
     options.extensions.alpha_reach = 0.0;
     options.extensions.shrink_correction = 0;

@@ -30,7 +30,7 @@ namespace dsreg {
 struct RegularizationWeights {
     double alpha = 1e-3;  ///< data attachment (the paper's; the pipeline's default is PipelineOptions::alpha)
     double beta = 1.0;    ///< normal alignment
-    double gamma = 1e-2;  ///< fairness
+    double gamma = 1e-2;  ///< fairness (the paper's; the pipeline's default is PipelineOptions::gamma)
     Eigen::VectorXd vertex_weights;  ///< diagonal of W0 (one per vertex, > 0), empty = identity
     Eigen::VectorXd face_weights;    ///< diagonal of W2 (one per face, > 0), empty = identity
     // Local multipliers (beyond the paper; empty = 1 everywhere). Added last, with default
