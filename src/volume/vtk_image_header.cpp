@@ -74,7 +74,7 @@ int vtk_type_bytes(const std::string& type) {
 void note_line(const std::string& lower_line, const std::vector<std::string>& words, VtkImageHeader& header) {
     const auto has = [&](const char* keyword) { return lower_line.find(keyword) != std::string::npos; };
     std::int64_t value = 0;
-    if (has("dimensions")) {
+    if (has("dimensions") && header.voxels == 0) {  // ITK reads the first (line 5), no later one
         header.voxels = 1;
         for (std::size_t w = 1; w < 4; ++w)
             header.voxels = parse_integer(words[w], value) && value < (1 << 20) ? header.voxels * value : -1;
