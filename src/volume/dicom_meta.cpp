@@ -89,6 +89,11 @@ void note_element(InputFile& file, std::uint64_t tag, std::uint64_t at, std::uin
         pixels.native_pixels = true;
         pixels.pixel_bytes = length;
     }
+    if (tag == 0x00080010) {  // Recognition Code (ACR-NEMA): GDCM asserts on any other value (found by fuzzing)
+        const std::string code = value_at(file, at, std::min<std::uint64_t>(length, 8));
+        if (code.rfind("ACR-NEMA", 0) != 0 && code.rfind("ACRNEMA", 0) != 0 && code.rfind("MIPS 2.0", 0) != 0)
+            file.fail("Recognition Code (0008,0010) is neither ACR-NEMA nor MIPS 2.0");
+    }
     if (tag == 0x00280008 && length <= 12) {  // Number of Frames, a decimal string
         const std::optional<double> frames = parse_whole_number(trimmed_uid(value_at(file, at, length)));
         if (frames && *frames >= 1 && *frames < 1e9) pixels.frames = static_cast<std::uint64_t>(*frames);
