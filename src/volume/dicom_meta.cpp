@@ -57,14 +57,9 @@ std::string trimmed_uid(std::string uid) {
     return uid;
 }
 
-/// Reads little- or big-endian unsigned integers of 2 or 4 bytes out of `bytes`.
+/// The little- or big-endian unsigned integer of 2 or 4 bytes at `first` in `bytes`.
 std::uint64_t unsigned_at(const std::string& bytes, std::size_t first, std::size_t count, bool big_endian) {
-    std::uint64_t value = 0;
-    for (std::size_t k = 0; k < count; ++k) {
-        const std::size_t at = big_endian ? first + k : first + count - 1 - k;
-        value = value << 8 | std::uint8_t(bytes[at]);
-    }
-    return value;
+    return unsigned_integer(reinterpret_cast<const std::uint8_t*>(bytes.data()) + first, count, big_endian);
 }
 
 /// The image pixel module of the data set's top level, as far as the walk has read it.
@@ -189,9 +184,7 @@ void check_dicom_meta(const std::string& path) {
         return read_at(offset, count);
     };
     const auto little = [](const std::string& b, std::size_t first, std::size_t count) {
-        std::uint64_t value = 0;
-        for (std::size_t k = count; k-- > 0;) value = value << 8 | std::uint8_t(b[first + k]);
-        return value;
+        return unsigned_at(b, first, count, false);  // group 0002 is always little endian
     };
     std::string transfer_syntax;
     for (int element = 0;; ++element) {

@@ -34,9 +34,7 @@ struct TiffLayout {
     std::uint64_t first_directory = 0;
 
     std::uint64_t number(const std::vector<std::uint8_t>& bytes, std::size_t at, std::size_t count) const {
-        std::uint64_t value = 0;
-        for (std::size_t k = 0; k < count; ++k) value = value << 8 | bytes[big_endian ? at + k : at + count - 1 - k];
-        return value;
+        return unsigned_integer(bytes.data() + at, count, big_endian);
     }
     std::size_t offset_bytes() const { return big_tiff ? 8 : 4; }
     std::size_t count_bytes() const { return big_tiff ? 8 : 2; }     ///< of a directory's entry count

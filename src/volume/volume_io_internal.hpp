@@ -49,6 +49,14 @@ bool parse_positive_integer(const std::string& text, std::int64_t& value);
 std::int64_t checked_voxel_count(const std::string& path, const Index3& dims, const VolumeLimits& limits);
 
 
+/// The unsigned integer stored in the `count` (at most 8) bytes at `bytes`, in the given byte order
+/// (the binary headers of TIFF and DICOM).
+inline std::uint64_t unsigned_integer(const std::uint8_t* bytes, std::size_t count, bool big_endian) {
+    std::uint64_t value = 0;
+    for (std::size_t k = 0; k < count; ++k) value = value << 8 | bytes[big_endian ? k : count - 1 - k];
+    return value;
+}
+
 /// A regular file opened for reading, with its size known up front and the read position tracked.
 class InputFile {
 public:
