@@ -563,6 +563,13 @@ TEST(MedicalIo, DicomMetaInformationThatEndsEarlyIsRefusedBeforeGdcmReadsIt) {
     std::memcpy(&short_pixels[pixel_data + 4], &pixel_bytes, 4);
     write_bytes(damaged.path("short-pixels.dcm"), short_pixels);
     expect_refused(damaged.path("short-pixels.dcm"), "Pixel Data (7FE0,0010) holds 178 bytes, but 9 rows x 10 columns x 1 frames");
+    // Encapsulated Pixel Data (undefined length) must hold items: GDCM asserted on another element there.
+    const std::size_t native = bytes.rfind(std::string("\xe0\x7f\x10\x00", 4));
+    ASSERT_NE(native, std::string::npos);
+    std::string encapsulated = bytes.substr(0, native + 4) + std::string(4, '\xff');  // undefined length
+    encapsulated += std::string("\x28\x00\x10\x00\x00\x00\x00\x00", 8);  // (0028,0010), where an item must be
+    write_bytes(damaged.path("encapsulated.dcm"), encapsulated);
+    expect_refused(damaged.path("encapsulated.dcm"), "encapsulated Pixel Data (7FE0,0010) holds (0028,0010) where an item");
     // Without meta information after the preamble GDCM guesses the encoding (and misread one).
     std::string group_3 = bytes;
     group_3[132] = 3;

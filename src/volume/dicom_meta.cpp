@@ -133,6 +133,7 @@ void check_data_set_lengths(InputFile& file, std::uint64_t at, const std::string
     std::string head(12, '\0');
     PixelModule pixels;
     int depth = 0;  // of the sequences and items of undefined length open
+    bool in_fragments = false;  // inside encapsulated Pixel Data (of undefined length, PS3.5 A.4)
     while (at + 8 <= size) {
         file.seek(at);
         const std::size_t got = file.read(reinterpret_cast<std::uint8_t*>(head.data()), 12);
@@ -149,7 +150,20 @@ void check_data_set_lengths(InputFile& file, std::uint64_t at, const std::string
         }
         at += header;
         const std::uint64_t tag = group << 16 | element;
-        if (tag == 0xfffee00d || tag == 0xfffee0dd) depth -= depth > 0 ? 1 : 0;  // an item's or a sequence's end
+        if (in_fragments) {
+            // Encapsulated pixel data is a sequence of fragments, items of defined length, closed
+            // by a sequence delimiter: GDCM asserted on anything else in their place (found by fuzzing).
+            if (tag == 0xfffee0dd) in_fragments = false;
+            else if (tag != 0xfffee000 || length == 0xffffffffu)
+                file.fail("encapsulated Pixel Data (7FE0,0010) holds (" + hex4(group) + "," + hex4(element) +
+                          ") where an item of defined length (FFFE,E000) or the sequence delimiter must be");
+        } else if (tag == 0xfffee00d || tag == 0xfffee0dd) {
+            depth -= depth > 0 ? 1 : 0;  // an item's or a sequence's end
+        }
+        if (depth == 0 && tag == 0x7fe00010 && length == 0xffffffffu) {
+            in_fragments = true;
+            continue;
+        }
         if (length == 0xffffffffu) {  // undefined length: its elements follow
             depth += 1;
             continue;
@@ -161,6 +175,7 @@ void check_data_set_lengths(InputFile& file, std::uint64_t at, const std::string
         at += length;
     }
     check_pixel_bytes(file, pixels);
+    if (in_fragments) file.fail("the file ends inside encapsulated Pixel Data (7FE0,0010), before its sequence delimiter");
     if (at < size)  // GDCM asserted on an element cut inside its tag or length (found by fuzzing)
         file.fail("the file ends inside a data element's header (" + std::to_string(size - at) + " bytes after the last element)");
 }
