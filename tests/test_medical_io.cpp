@@ -552,6 +552,13 @@ TEST(MedicalIo, DicomMetaInformationThatEndsEarlyIsRefusedBeforeGdcmReadsIt) {
     samples[spp + 8] = 2;
     write_bytes(damaged.path("samples.dcm"), samples);
     expect_refused(damaged.path("samples.dcm"), "Samples per Pixel (0028,0002) is 2 (DICOM allows 1, 3 or 4)");
+    // GDCM asserts on a pixel format without a scalar type: signed single bits, 24-bit pixels.
+    std::string signed_bits = bytes;
+    const std::size_t allocated = signed_bits.find(std::string("\x28\x00\x00\x01\x02\x00\x00\x00", 8), meta_end);
+    ASSERT_NE(allocated, std::string::npos);
+    signed_bits[allocated + 8] = 24;
+    write_bytes(damaged.path("bits.dcm"), signed_bits);
+    expect_refused(damaged.path("bits.dcm"), "Bits Allocated (0028,0100) is 24 (1, 8, 12, 16, 32 or 64 here)");
     // Pixel Data short of what Rows x Columns x Bits Allocated say: GDCM and ITK read the rest from
     // memory never written. Here the file loses its last 2 bytes and its Pixel Data's length 2.
     std::string short_pixels = bytes.substr(0, bytes.size() - 2);

@@ -64,7 +64,7 @@ std::uint64_t unsigned_at(const std::string& bytes, std::size_t first, std::size
 
 /// The image pixel module of the data set's top level, as far as the walk has read it.
 struct PixelModule {
-    std::uint64_t rows = 0, columns = 0, frames = 1, samples = 1, bits = 0;
+    std::uint64_t rows = 0, columns = 0, frames = 1, samples = 1, bits = 0, pixel_representation = 0;
     std::uint64_t pixel_bytes = 0;  ///< the length of a native Pixel Data element
     bool native_pixels = false;
 };
@@ -93,7 +93,8 @@ void note_element(InputFile& file, std::uint64_t tag, std::uint64_t at, std::uin
         const std::optional<double> frames = parse_whole_number(trimmed_uid(value_at(file, at, length)));
         if (frames && *frames >= 1 && *frames < 1e9) pixels.frames = static_cast<std::uint64_t>(*frames);
     }
-    if (length != 2 || (tag != 0x00280002 && tag != 0x00280010 && tag != 0x00280011 && tag != 0x00280100)) return;
+    if (length != 2 || (tag != 0x00280002 && tag != 0x00280010 && tag != 0x00280011 && tag != 0x00280100 && tag != 0x00280103))
+        return;
     const std::string value = value_at(file, at, 2);
     if (value.size() != 2) return;
     const std::uint64_t number = unsigned_at(value, 0, 2, big_endian);
@@ -103,6 +104,22 @@ void note_element(InputFile& file, std::uint64_t tag, std::uint64_t at, std::uin
     if (tag == 0x00280010) pixels.rows = number;
     if (tag == 0x00280011) pixels.columns = number;
     if (tag == 0x00280100) pixels.bits = number;
+    if (tag == 0x00280103) pixels.pixel_representation = number;
+}
+
+/// GDCM asserts on a pixel format it has no scalar type for: Bits Allocated other than 1, 8, 12,
+/// 16, 32 or 64 with signed values, or signed single bits (found by fuzzing). PS3.3 C.7.6.3.1
+/// allows Pixel Representation 0 (unsigned) or 1 (two's complement) only.
+void check_pixel_format(const InputFile& file, const PixelModule& pixels) {
+    if (pixels.pixel_representation > 1)
+        file.fail("Pixel Representation (0028,0103) is " + std::to_string(pixels.pixel_representation) +
+                  " (DICOM allows 0 or 1)");
+    if (pixels.bits == 0) return;
+    const bool known = pixels.bits == 1 || pixels.bits == 8 || pixels.bits == 12 || pixels.bits == 16 || pixels.bits == 32 ||
+                       pixels.bits == 64;
+    if (!known) file.fail("Bits Allocated (0028,0100) is " + std::to_string(pixels.bits) + " (1, 8, 12, 16, 32 or 64 here)");
+    if (pixels.bits == 1 && pixels.pixel_representation == 1)
+        file.fail("Bits Allocated (0028,0100) is 1 with signed values (Pixel Representation (0028,0103) 1)");
 }
 
 /// Native (not encapsulated) pixel data must hold what the pixel module says: GDCM and ITK read
@@ -174,6 +191,7 @@ void check_data_set_lengths(InputFile& file, std::uint64_t at, const std::string
         if (depth == 0) note_element(file, tag, at, length, big_endian, pixels);
         at += length;
     }
+    check_pixel_format(file, pixels);
     check_pixel_bytes(file, pixels);
     if (in_fragments) file.fail("the file ends inside encapsulated Pixel Data (7FE0,0010), before its sequence delimiter");
     if (at < size)  // GDCM asserted on an element cut inside its tag or length (found by fuzzing)
