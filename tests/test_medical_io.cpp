@@ -559,6 +559,9 @@ TEST(MedicalIo, DicomMetaInformationThatEndsEarlyIsRefusedBeforeGdcmReadsIt) {
     signed_bits[allocated + 8] = 24;
     write_bytes(damaged.path("bits.dcm"), signed_bits);
     expect_refused(damaged.path("bits.dcm"), "Bits Allocated (0028,0100) is 24 (1, 8, 12, 16, 32 or 64 here)");
+    signed_bits[allocated + 8] = 8;  // below the 16 Bits Stored: GDCM throws what ITK does not catch
+    write_bytes(damaged.path("stored.dcm"), signed_bits);
+    expect_refused(damaged.path("stored.dcm"), "Bits Stored (0028,0101) is 16, more than Bits Allocated (0028,0100) 8");
     // Pixel Data short of what Rows x Columns x Bits Allocated say: GDCM and ITK read the rest from
     // memory never written. Here the file loses its last 2 bytes and its Pixel Data's length 2.
     std::string short_pixels = bytes.substr(0, bytes.size() - 2);

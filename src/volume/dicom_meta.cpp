@@ -64,7 +64,7 @@ std::uint64_t unsigned_at(const std::string& bytes, std::size_t first, std::size
 
 /// The image pixel module of the data set's top level, as far as the walk has read it.
 struct PixelModule {
-    std::uint64_t rows = 0, columns = 0, frames = 1, samples = 1, bits = 0, pixel_representation = 0;
+    std::uint64_t rows = 0, columns = 0, frames = 1, samples = 1, bits = 0, bits_stored = 0, pixel_representation = 0;
     std::uint64_t pixel_bytes = 0;  ///< the length of a native Pixel Data element
     bool native_pixels = false;
 };
@@ -93,7 +93,8 @@ void note_element(InputFile& file, std::uint64_t tag, std::uint64_t at, std::uin
         const std::optional<double> frames = parse_whole_number(trimmed_uid(value_at(file, at, length)));
         if (frames && *frames >= 1 && *frames < 1e9) pixels.frames = static_cast<std::uint64_t>(*frames);
     }
-    if (length != 2 || (tag != 0x00280002 && tag != 0x00280010 && tag != 0x00280011 && tag != 0x00280100 && tag != 0x00280103))
+    if (length != 2 || (tag != 0x00280002 && tag != 0x00280010 && tag != 0x00280011 && tag != 0x00280100 && tag != 0x00280101 &&
+                           tag != 0x00280103))
         return;
     const std::string value = value_at(file, at, 2);
     if (value.size() != 2) return;
@@ -104,11 +105,13 @@ void note_element(InputFile& file, std::uint64_t tag, std::uint64_t at, std::uin
     if (tag == 0x00280010) pixels.rows = number;
     if (tag == 0x00280011) pixels.columns = number;
     if (tag == 0x00280100) pixels.bits = number;
+    if (tag == 0x00280101) pixels.bits_stored = number;
     if (tag == 0x00280103) pixels.pixel_representation = number;
 }
 
 /// GDCM asserts on a pixel format it has no scalar type for: Bits Allocated other than 1, 8, 12,
-/// 16, 32 or 64 with signed values, or signed single bits (found by fuzzing). PS3.3 C.7.6.3.1
+/// 16, 32 or 64 with signed values, or signed single bits (found by fuzzing); Bits Stored above
+/// Bits Allocated makes it throw what ITK does not catch. PS3.3 C.7.6.3.1
 /// allows Pixel Representation 0 (unsigned) or 1 (two's complement) only.
 void check_pixel_format(const InputFile& file, const PixelModule& pixels) {
     if (pixels.pixel_representation > 1)
@@ -120,6 +123,9 @@ void check_pixel_format(const InputFile& file, const PixelModule& pixels) {
     if (!known) file.fail("Bits Allocated (0028,0100) is " + std::to_string(pixels.bits) + " (1, 8, 12, 16, 32 or 64 here)");
     if (pixels.bits == 1 && pixels.pixel_representation == 1)
         file.fail("Bits Allocated (0028,0100) is 1 with signed values (Pixel Representation (0028,0103) 1)");
+    if (pixels.bits_stored > pixels.bits)
+        file.fail("Bits Stored (0028,0101) is " + std::to_string(pixels.bits_stored) + ", more than Bits Allocated (0028,0100) " +
+                  std::to_string(pixels.bits));
 }
 
 /// Native (not encapsulated) pixel data must hold what the pixel module says: GDCM and ITK read
