@@ -538,6 +538,10 @@ TEST(MedicalIo, DicomMetaInformationThatEndsEarlyIsRefusedBeforeGdcmReadsIt) {
     no_vr[136] = no_vr[137] = '\x01';
     write_bytes(damaged.path("no-vr.dcm"), no_vr);
     expect_refused(damaged.path("no-vr.dcm"), "(0002,0000) has no explicit value representation");
+    std::string sequence = bytes;  // GDCM asserts on a sequence in group 0002
+    sequence[136] = 'S', sequence[137] = 'Q';
+    write_bytes(damaged.path("sequence.dcm"), sequence);
+    expect_refused(damaged.path("sequence.dcm"), "DICOM meta information element (0002,0000) is a sequence");
     // GDCM allocates what a data element's length says: the first element of the data set
     // (implicit VR little endian, as ITK writes it: tag, then a 4-byte length) says 1.8 GB.
     std::string long_element = bytes;
