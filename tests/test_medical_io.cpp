@@ -11,6 +11,8 @@
 #include "dsreg/error.hpp"
 #include "dsreg/volume_io.hpp"
 #include "medical_test_support.hpp"
+// check_dicom_in_child_process, tested on a file that makes GDCM abort (no ITK in the header).
+#include "../src/volume/itk_bridge.hpp"
 
 using namespace dsreg;
 using dsreg::test::ScratchFolder;
@@ -601,6 +603,34 @@ TEST(MedicalIo, DicomMetaInformationThatEndsEarlyIsRefusedBeforeGdcmReadsIt) {
     } catch (const Error& error) {
         EXPECT_EQ(std::string(error.what()).rfind(scratch.path(slices[1]) + ": the file ends inside", 0), 0u) << error.what();
     }
+}
+
+TEST(MedicalIo, DicomFileThatMakesGdcmAbortIsRefusedNotFatal) {
+    // Signed single-bit pixels make Debian's GDCM (assertions on) abort in its pixel format.
+    // check_dicom_meta refuses them first; here the child process alone must contain the abort.
+    ScratchFolder scratch("medical-dicom-child");
+    const VoxelGrid grid = test::oblique_grid({10, 9, 2});
+    write_dicom_series(scratch.folder(), grid, test::sample_ellipsoid(grid, test::test_ellipsoid(grid), 1), RawVoxelType::UInt16);
+    std::vector<std::string> slices = scratch.entries();
+    std::sort(slices.begin(), slices.end());
+    const std::string valid = scratch.path(slices[0]);
+    EXPECT_NO_THROW(volume_io_detail::check_dicom_in_child_process(valid));
+    std::string bytes = read_bytes(valid);
+    for (const std::string element : {std::string("\x28\x00\x00\x01\x02\x00\x00\x00", 8), std::string("\x28\x00\x03\x01\x02\x00\x00\x00", 8)}) {
+        const std::size_t at = bytes.find(element);
+        ASSERT_NE(at, std::string::npos);
+        bytes[at + 8] = 1, bytes[at + 9] = 0;  // Bits Allocated 1, Pixel Representation 1
+    }
+    ScratchFolder damaged("medical-dicom-child-damaged");
+    write_bytes(damaged.path("abort.dcm"), bytes);
+    try {
+        volume_io_detail::check_dicom_in_child_process(damaged.path("abort.dcm"));
+        ADD_FAILURE() << "GDCM did not abort on signed single bits";
+    } catch (const Error& error) {
+        EXPECT_NE(std::string(error.what()).find("abort.dcm: GDCM, the DICOM library, aborted reading this file (signal 6"), std::string::npos)
+            << error.what();
+    }
+    expect_refused(damaged.path("abort.dcm"), "Bits Allocated (0028,0100) is 1 with signed values");
 }
 
 TEST(MedicalIo, MalformedHeadersGetMessagesNamingTheFile) {

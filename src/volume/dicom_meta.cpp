@@ -93,9 +93,11 @@ void note_element(InputFile& file, std::uint64_t tag, std::uint64_t at, std::uin
         const std::optional<double> frames = parse_whole_number(trimmed_uid(value_at(file, at, length)));
         if (frames && *frames >= 1 && *frames < 1e9) pixels.frames = static_cast<std::uint64_t>(*frames);
     }
-    if (length != 2 || (tag != 0x00280002 && tag != 0x00280010 && tag != 0x00280011 && tag != 0x00280100 && tag != 0x00280101 &&
-                           tag != 0x00280103))
+    if (tag != 0x00280002 && tag != 0x00280010 && tag != 0x00280011 && tag != 0x00280100 && tag != 0x00280101 && tag != 0x00280103)
         return;
+    if (length != 2)  // one US value; GDCM read 2 of the 12 bytes of one as Samples per Pixel and asserted (fuzzing)
+        file.fail("pixel module element (0028," + hex4(tag & 0xffff) + ") holds " + std::to_string(length) +
+                  " bytes, not one 2-byte value");
     const std::string value = value_at(file, at, 2);
     if (value.size() != 2) return;
     const std::uint64_t number = unsigned_at(value, 0, 2, big_endian);

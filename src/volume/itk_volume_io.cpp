@@ -72,7 +72,10 @@ void read_itk_voxels(const std::string& path, ItkFormat format, const VolumeLimi
         check_tiff_entries(path);
         check_tiff_pages(path);
     }
-    if (format == ItkFormat::DicomFile) check_dicom_meta(path);
+    if (format == ItkFormat::DicomFile) {
+        check_dicom_meta(path);
+        check_dicom_in_child_process(path);
+    }
     if (format == ItkFormat::VtkImage) check_vtk_image_header(path);
     if (format == ItkFormat::Hdf5) check_hdf5_voxel_data(path);
     ItkImageReader reader(path, format);
@@ -102,7 +105,10 @@ void read_dicom_series_voxels(const std::string& folder, const VolumeLimits& lim
     // GDCM reads every file of the folder to sort out the series.
     std::error_code error;
     for (const auto& entry : std::filesystem::directory_iterator(folder, error))
-        if (entry.is_regular_file(error)) check_dicom_meta(entry.path().string());
+        if (entry.is_regular_file(error)) {
+            check_dicom_meta(entry.path().string());
+            check_dicom_in_child_process(entry.path().string());
+        }
     DicomSeriesReader reader(folder);
     const ImageHeader& header = reader.header();
     if (!prepare_destination(folder, header, reader.files(), limits, destination)) return;
