@@ -482,6 +482,19 @@ TEST(MedicalIo, VtkImageHeaderLinesAreCheckedBeforeItkReadsThem) {
     no_table[no_table.find("LOOKUP_TABLE")] = 'X';
     write_bytes(scratch.path("no-table.vtk"), no_table);
     expect_refused(scratch.path("no-table.vtk"), "truncated payload: the header says 224 voxels");
+    // COLOR_SCALARS (unsigned bytes, no lookup table): ITK's whole read took a short payload too.
+    std::string color = bytes;
+    const std::size_t table = color.find("LOOKUP_TABLE default\n");
+    ASSERT_NE(table, std::string::npos);
+    color.replace(scalars, table + 21 - scalars, "COLOR_SCALARS c 1\n");
+    write_bytes(scratch.path("color.vtk"), color);
+    EXPECT_EQ(read_volume(scratch.path("color.vtk")).mask, read_volume(scratch.path("good.vtk")).mask);
+    write_bytes(scratch.path("short-color.vtk"), color.substr(0, color.size() - 5));
+    expect_refused(scratch.path("short-color.vtk"), "truncated payload: the header says 224 voxels of 1 bytes = 224 bytes");
+    // After COLOR_SCALARS, ITK's whole read takes a LOOKUP_TABLE line for voxels, its slab read skips it.
+    color.insert(color.find("COLOR_SCALARS c 1\n") + 18, "LOOKUP_TABLE default\n");
+    write_bytes(scratch.path("color-table.vtk"), color);
+    expect_refused(scratch.path("color-table.vtk"), "a LOOKUP_TABLE line after COLOR_SCALARS");
 }
 
 TEST(MedicalIo, DamagedHdf5IsAnErrorNotACrash) {

@@ -100,14 +100,34 @@ void check_payload(const InputFile& file, const VtkImageHeader& header) {
                   " bytes, the file holds " + std::to_string(file.remaining()) + " after the header");
 }
 
+/// Reads the next line (at most 1 KiB of it): whether it holds LOOKUP_TABLE, as ITK looks for it.
+bool next_line_is_lookup_table(InputFile& file) {
+    std::string next;
+    for (int c = file.get(); c != -1 && c != '\n' && next.size() < 1024; c = file.get()) next.push_back(static_cast<char>(c));
+    return to_lower(next).find("lookup_table") != std::string::npos;
+}
+
 /// Where ITK's header ends: after the SCALARS line, or after the next one if it holds
 /// LOOKUP_TABLE (ITK reads that line, and steps back unless it does: a garbled one found by
 /// fuzzing was payload). Then checks the payload from there.
 void check_after_scalars(InputFile& file, const VtkImageHeader& header) {
     const std::uint64_t payload = file.position();
-    std::string next;
-    for (int c = file.get(); c != -1 && c != '\n' && next.size() < 1024; c = file.get()) next.push_back(static_cast<char>(c));
-    if (to_lower(next).find("lookup_table") == std::string::npos) file.seek(payload);
+    if (!next_line_is_lookup_table(file)) file.seek(payload);
+    check_payload(file, header);
+}
+
+/// COLOR_SCALARS: unsigned bytes in a binary file, as many per voxel as the line's third word
+/// says (1 if none), right after the line. ITK's whole read took a short payload without a word
+/// (found by fuzzing), and does not skip a LOOKUP_TABLE line there where its streaming read does
+/// (a box would not be the crop of the whole): such a line is refused.
+void check_after_color_scalars(InputFile& file, VtkImageHeader header, const std::vector<std::string>& words) {
+    std::int64_t components = 1;
+    header.value_bytes = 1;
+    header.components = words.size() >= 3 && parse_integer(words[2], components) ? components : 1;
+    const std::uint64_t payload = file.position();
+    if (next_line_is_lookup_table(file))
+        file.fail("a LOOKUP_TABLE line after COLOR_SCALARS (ITK's reader takes it for voxels or skips it, depending on the read)");
+    file.seek(payload);
     check_payload(file, header);
 }
 
@@ -126,7 +146,13 @@ void check_vtk_image_header(const std::string& path) {
         header.binary = number == 3 ? lower_line.find("ascii") == std::string::npos && lower_line.find("binary") != std::string::npos
                                     : header.binary;
         if (number < 5) continue;  // the version, the file type and the data set line: ITK reads no keyword there
-        if (const char* geometry = geometry_keyword(lower_line)) check_geometry_line(file, number, geometry, words);
+        if (const char* geometry = geometry_keyword(lower_line)) {
+            check_geometry_line(file, number, geometry, words);
+        } else if (lower_line.find("vector") != std::string::npos) {
+            return;  // VECTORS (ITK looks for this first): 3 components, which dsreg refuses after the header
+        } else if (lower_line.find("color_scalars") != std::string::npos) {
+            return check_after_color_scalars(file, header, words);
+        }
         note_line(lower_line, words, header);
         if (lower_line.find("scalars") != std::string::npos) return check_after_scalars(file, header);
     }
