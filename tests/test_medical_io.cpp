@@ -495,6 +495,11 @@ TEST(MedicalIo, VtkImageHeaderLinesAreCheckedBeforeItkReadsThem) {
     color.insert(color.find("COLOR_SCALARS c 1\n") + 18, "LOOKUP_TABLE default\n");
     write_bytes(scratch.path("color-table.vtk"), color);
     expect_refused(scratch.path("color-table.vtk"), "a LOOKUP_TABLE line after COLOR_SCALARS");
+    // ITK skips empty lines: with one before the file type line, its BINARY is ITK's line 3 still.
+    write_bytes(scratch.path("blank-short.vtk"), "\n" + bytes.substr(0, bytes.size() - 5));
+    expect_refused(scratch.path("blank-short.vtk"), "truncated payload: the header says 224 voxels");
+    write_bytes(scratch.path("blank.vtk"), "\n" + bytes);
+    EXPECT_EQ(read_volume(scratch.path("blank.vtk")).mask, read_volume(scratch.path("good.vtk")).mask);
 }
 
 TEST(MedicalIo, DamagedHdf5IsAnErrorNotACrash) {

@@ -137,15 +137,22 @@ void check_vtk_image_header(const std::string& path) {
     InputFile file(path);
     VtkImageHeader header;
     std::string line;
-    for (std::int64_t number = 1; read_header_line(file, line, kMaxHeaderBytes); ++number) {
-        if (number == 2) continue;  // the title: free text
+    // ITK skips empty lines (no byte before the newline) and counts the others: `itk_line` is the
+    // line as ITK numbers it (a blank line before BINARY made ITK read a binary payload that
+    // this walk took for ASCII, unchecked; found by fuzzing), `number` the line in the file.
+    std::int64_t itk_line = 0;
+    for (std::int64_t number = 1;; ++number) {
+        const std::uint64_t start = file.position();
+        if (!read_header_line(file, line, kMaxHeaderBytes)) break;
+        if (file.position() == start + 1 && line.empty()) continue;
+        if (++itk_line == 2) continue;  // the title: free text
         if (!is_text(line)) file.fail("header line " + std::to_string(number) + " holds control characters (a NUL byte?)");
         const std::vector<std::string> words = split_words(line);
         if (words.empty()) continue;
         const std::string lower_line = to_lower(line);
-        header.binary = number == 3 ? lower_line.find("ascii") == std::string::npos && lower_line.find("binary") != std::string::npos
-                                    : header.binary;
-        if (number < 5) continue;  // the version, the file type and the data set line: ITK reads no keyword there
+        header.binary = itk_line == 3 ? lower_line.find("ascii") == std::string::npos && lower_line.find("binary") != std::string::npos
+                                      : header.binary;
+        if (itk_line < 5) continue;  // the version, the file type and the data set line: ITK reads no keyword there
         if (const char* geometry = geometry_keyword(lower_line)) {
             check_geometry_line(file, number, geometry, words);
         } else if (lower_line.find("vector") != std::string::npos) {
