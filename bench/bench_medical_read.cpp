@@ -8,6 +8,10 @@
 //                                             its buffer (what itk::ImageFileReader does)
 //   dsreg_bench_medical_read dims FILE        read_volume_dims: the header alone (the process's
 //                                             own memory, for the figures of the others)
+//   dsreg_bench_medical_read write-dicom DIR [N]  writes the label map as a DICOM series of N
+//                                             slices (int16, default N 256) into the folder DIR
+//   dsreg_bench_medical_read dicom-child DIR  check_dicom_in_child_process on the files of DIR:
+//                                             what the child-process guard adds to a series read
 //   dsreg_bench_medical_read boxes FILE [B]   read_volume_box of every B³ block (default 64) in
 //                                             turn, as a block-wise run reads them (any format
 //                                             read_volume_box reads: .nii, .nii.gz, .h5, ...)
@@ -17,6 +21,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -51,7 +56,7 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 
 int main(int argc, char** argv) {
     if (argc < 3) {
-        std::fprintf(stderr, "usage: %s write|dsreg|values|itk|dims|boxes FILE [N|B]\n", argv[0]);
+        std::fprintf(stderr, "usage: %s write|write-dicom|dsreg|values|itk|dims|boxes|dicom-child FILE [N|B]\n", argv[0]);
         return 2;
     }
     const std::string mode = argv[1], path = argv[2];
@@ -63,6 +68,18 @@ int main(int argc, char** argv) {
             grid.dims = {n, n, n};
             grid.spacing = Eigen::Vector3d(0.7, 0.7, 1.0);
             write_image(path, grid, label_map(n), RawVoxelType::UInt8);
+        } else if (mode == "write-dicom") {
+            const std::int64_t n = argc > 3 ? std::stoll(argv[3]) : 256;
+            VoxelGrid grid;
+            grid.dims = {n, n, n};
+            grid.spacing = Eigen::Vector3d(0.7, 0.7, 1.0);
+            std::filesystem::create_directories(path);
+            write_dicom_series(path, grid, label_map(n), RawVoxelType::Int16);
+        } else if (mode == "dicom-child") {
+            std::vector<std::string> files;
+            for (const auto& entry : std::filesystem::directory_iterator(path)) files.push_back(entry.path().string());
+            volume_io_detail::check_dicom_in_child_process(files);
+            std::printf("%zu files\n", files.size());
         } else if (mode == "dsreg") {
             const BinaryVolume volume = read_volume(path);
             std::printf("%lld object voxels\n", static_cast<long long>(volume.object_voxel_count()));

@@ -260,43 +260,67 @@ const char* itk_format_name(ItkFormat format) {
     return "";
 }
 
-void check_dicom_in_child_process(const std::string& path) {
+namespace {
+
+/// What the child process of check_dicom_in_child_process does with one file: GDCM's reading of
+/// it as the parent's reader will do it (its header, then its voxels up to 256 MiB). Exceptions
+/// are the parent's reader's to report.
+void read_dicom_file_quietly(const std::string& path) {
     constexpr itk::SizeValueType kLargestChildRead = itk::SizeValueType(256) << 20;
+    try {
+        const itk::GDCMImageIO::Pointer io = itk::GDCMImageIO::New();
+        if (!io->CanReadFile(path.c_str())) return;
+        io->SetFileName(path);
+        io->ReadImageInformation();
+        const itk::SizeValueType bytes = io->GetImageSizeInBytes();
+        if (bytes > kLargestChildRead) return;
+        std::vector<char> buffer(static_cast<std::size_t>(bytes));
+        std::vector<std::int64_t> sizes;
+        for (unsigned d = 0; d < io->GetNumberOfDimensions(); ++d) sizes.push_back(std::int64_t(io->GetDimensions(d)));
+        io->SetIORegion(slice_region(sizes, 0, sizes.size() >= 3 ? sizes[2] : 1));
+        io->Read(buffer.data());
+    } catch (...) {
+    }
+}
+
+}  // namespace
+
+void check_dicom_in_child_process(const std::vector<std::string>& paths) {
+    if (paths.empty()) return;
+    int channel[2];  // the child writes the index of each file before reading it
+    if (pipe(channel) != 0) return;  // no child process: the read that follows decides alone
     const pid_t child = fork();
-    if (child < 0) return;  // no child process: the read that follows decides alone
+    if (child < 0) {
+        close(channel[0]), close(channel[1]);
+        return;
+    }
     if (child == 0) {
         // The child dies of what would have killed the parent (and not through a sanitizer's
         // or fuzzer's handler, which would report it as a crash of the parent).
         for (const int signal_number : {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL}) std::signal(signal_number, SIG_DFL);
         const int null_device = open("/dev/null", O_WRONLY);  // GDCM's assertion text: the parent reports
         if (null_device >= 0) dup2(null_device, STDERR_FILENO), dup2(null_device, STDOUT_FILENO);
-        int status = 0;
-        try {
-            silence_itk_warnings();
-            const itk::GDCMImageIO::Pointer io = itk::GDCMImageIO::New();
-            if (io->CanReadFile(path.c_str())) {
-                io->SetFileName(path);
-                io->ReadImageInformation();
-                const itk::SizeValueType bytes = io->GetImageSizeInBytes();
-                if (bytes <= kLargestChildRead) {
-                    std::vector<char> buffer(static_cast<std::size_t>(bytes));
-                    std::vector<std::int64_t> sizes;
-                    for (unsigned d = 0; d < io->GetNumberOfDimensions(); ++d) sizes.push_back(std::int64_t(io->GetDimensions(d)));
-                    io->SetIORegion(slice_region(sizes, 0, sizes.size() >= 3 ? sizes[2] : 1));
-                    io->Read(buffer.data());
-                }
-            }
-        } catch (...) {
-            status = 1;
+        close(channel[0]);
+        silence_itk_warnings();
+        for (std::uint32_t index = 0; index < paths.size(); ++index) {
+            if (write(channel[1], &index, sizeof index) != ssize_t(sizeof index)) _exit(1);
+            read_dicom_file_quietly(paths[index]);
         }
-        _exit(status);  // no exit handlers, no flush of the parent's buffers
+        _exit(0);  // no exit handlers, no flush of the parent's buffers
     }
+    close(channel[1]);
+    std::uint32_t index = 0, last = 0;
+    for (ssize_t got; (got = read(channel[0], &index, sizeof index)) != 0;) {
+        if (got == ssize_t(sizeof index)) last = index;
+        else if (got < 0 && errno != EINTR) break;
+    }
+    close(channel[0]);
     int status = 0;
     while (waitpid(child, &status, 0) < 0)
         if (errno != EINTR) return;
-    if (WIFSIGNALED(status))
-        fail_path(path, "GDCM, the DICOM library, aborted reading this file (signal " + std::to_string(WTERMSIG(status)) +
-                            "): damaged or unsupported DICOM data");
+    if (WIFSIGNALED(status) && last < paths.size())
+        fail_path(paths[last], "GDCM, the DICOM library, aborted reading this file (signal " + std::to_string(WTERMSIG(status)) +
+                                   "): damaged or unsupported DICOM data");
 }
 
 ImageHeader read_itk_header(const std::string& path, ItkFormat format) {

@@ -44,12 +44,12 @@ struct ImageHeader {
 /// ITK's reading of the header of `path` (no voxel is read).
 ImageHeader read_itk_header(const std::string& path, ItkFormat format);
 
-/// Reads the DICOM file `path` through GDCM in a child process (its header, and its voxels up to
-/// 256 MiB) and throws dsreg::Error naming the file if that process dies of a signal. Debian's
-/// GDCM is built with its assertions on and aborts on some damaged data instead of failing;
-/// check_dicom_meta refuses the cases fuzzing found, this contains the others. A file GDCM
-/// fails on normally passes here: the reader that follows reports its error.
-void check_dicom_in_child_process(const std::string& path);
+/// Reads the DICOM files `paths` through GDCM in one child process (each file's header, and its
+/// voxels up to 256 MiB) and throws dsreg::Error naming the file being read if that process dies
+/// of a signal. Debian's GDCM is built with its assertions on and aborts on some damaged data
+/// instead of failing; check_dicom_meta refuses the cases fuzzing found, this contains the
+/// others. A file GDCM fails on normally passes here: the reader that follows reports its error.
+void check_dicom_in_child_process(const std::vector<std::string>& paths);
 
 /// An image file opened through ITK to read its voxels.
 class ItkImageReader {

@@ -74,7 +74,7 @@ void read_itk_voxels(const std::string& path, ItkFormat format, const VolumeLimi
     }
     if (format == ItkFormat::DicomFile) {
         check_dicom_meta(path);
-        check_dicom_in_child_process(path);
+        check_dicom_in_child_process({path});
     }
     if (format == ItkFormat::VtkImage) check_vtk_image_header(path);
     if (format == ItkFormat::Hdf5) check_hdf5_voxel_data(path);
@@ -104,11 +104,13 @@ void read_itk_voxels(const std::string& path, ItkFormat format, const VolumeLimi
 void read_dicom_series_voxels(const std::string& folder, const VolumeLimits& limits, VoxelDestination& destination) {
     // GDCM reads every file of the folder to sort out the series.
     std::error_code error;
+    std::vector<std::string> files;
     for (const auto& entry : std::filesystem::directory_iterator(folder, error))
         if (entry.is_regular_file(error)) {
-            check_dicom_meta(entry.path().string());
-            check_dicom_in_child_process(entry.path().string());
+            files.push_back(entry.path().string());
+            check_dicom_meta(files.back());
         }
+    check_dicom_in_child_process(files);
     DicomSeriesReader reader(folder);
     const ImageHeader& header = reader.header();
     if (!prepare_destination(folder, header, reader.files(), limits, destination)) return;
