@@ -220,3 +220,5 @@ put("nrrd", "nan-space-directions.nrrd", NRRD.format(type="uchar", dimension=3, 
     extra="space: left-posterior-superior\nspace directions: (nan,0,0) (0,1,0) (0,0,1)\n") + "x" * 8)
 put("metaimage", "inf-offset.mha", MHA.format(ndims=3, sizes="2 2 2", type="MET_UCHAR", extra="Offset = inf 0 0\n", data="LOCAL")
     + "x" * 8)
+put("metaimage", "spacing-count.mha", MHA.format(ndims=3, sizes="1 1 1", type="MET_UCHAR", extra="ElementSpacing = 1 1\n",
+                                                 data="LOCAL") + "\x01")

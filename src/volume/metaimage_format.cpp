@@ -42,11 +42,15 @@ using Fields = std::map<std::string, std::string>;
 constexpr std::size_t kMaxKeyBytes = 200;        ///< the text before '=' (ITK's field names hold 254)
 constexpr std::size_t kMaxTextValueBytes = 200;  ///< a value that is not a list of numbers (ITK's text fields hold 254)
 
-/// Whether every word of `value` is a number (DimSize, ElementSpacing, TransformMatrix…).
-bool is_number_list(const std::string& value) {
-    for (const std::string& word : split_words(value))
-        if (!parse_whole_number(word)) return false;
-    return true;
+/// Keys whose values MetaIO reads as lists of numbers, one per dimension (or NDims² for a
+/// matrix): the only values allowed to be long. Every other value is copied by MetaIO into a
+/// 255-byte field (Comment, Name…) or is a single word.
+bool is_number_list_key(const std::string& lower_key) {
+    static const char* const keys[] = {"dimsize",         "offset",      "position",    "origin",          "elementspacing",
+                                       "elementsize",     "transformmatrix", "rotation", "orientation", "centerofrotation"};
+    for (const char* key : keys)
+        if (lower_key == key) return true;
+    return false;
 }
 
 Fields read_fields(InputFile& file) {
@@ -66,14 +70,15 @@ Fields read_fields(InputFile& file) {
             file.fail("header line " + std::to_string(line_number) + " has a key of " + std::to_string(equals) +
                       " bytes (MetaImage keys are words, at most " + std::to_string(kMaxKeyBytes) + " bytes here)");
         // Text values (Comment, Name, ObjectSubType…) are copied by MetaIO into 255-byte fields
-        // without a bound as well (found by trying every key with long values).
-        // Measured untrimmed: MetaIO may keep the spaces around it.
+        // without a bound as well (found by trying every key with long values; a Comment made of
+        // numbers overflows as well: found by fuzzing). Measured untrimmed: MetaIO may keep the
+        // spaces around it.
         const std::string value = trim(line.substr(equals + 1));
         const std::size_t value_bytes = line.size() - equals - 1;
-        if (value_bytes > kMaxTextValueBytes && !is_number_list(value))
+        if (value_bytes > kMaxTextValueBytes && !is_number_list_key(key))
             file.fail("header line " + std::to_string(line_number) + ": the value of '" + trim(line.substr(0, equals)) +
-                      "' is " + std::to_string(value_bytes) + " bytes of text (at most " +
-                      std::to_string(kMaxTextValueBytes) + " here: ITK's MetaImage reader cannot hold longer ones)");
+                      "' is " + std::to_string(value_bytes) + " bytes (at most " + std::to_string(kMaxTextValueBytes) +
+                      " here but for lists of numbers such as DimSize: ITK's MetaImage reader cannot hold longer ones)");
         if (!fields.emplace(key, value).second)
             file.fail("key '" + trim(line.substr(0, equals)) + "' appears twice (line " + std::to_string(line_number) + ")");
         if (key == "elementdatafile") return fields;  // the data (if LOCAL) starts on the next line
@@ -126,8 +131,9 @@ MetaHeader parse_header(InputFile& file) {
     if (dims == fields.end() || sizes == fields.end() || type == fields.end())
         file.fail("missing required key (NDims, DimSize and ElementType are needed)");
     std::int64_t rank = 0;
-    if (!parse_positive_integer(dims->second, rank) || rank > 16)
-        file.fail("NDims " + quote_excerpt(dims->second) + " is not a number of dimensions (1 to 16)");
+    // MetaIO's arrays hold 10 dimensions (it would read a larger NDims as 10).
+    if (!parse_positive_integer(dims->second, rank) || rank > 10)
+        file.fail("NDims " + quote_excerpt(dims->second) + " is not a number of dimensions (1 to 10)");
     const std::vector<std::string> words = split_words(sizes->second);
     if (static_cast<std::int64_t>(words.size()) != rank)
         file.fail("DimSize gives " + std::to_string(words.size()) + " sizes for NDims = " + std::to_string(rank));
@@ -136,11 +142,20 @@ MetaHeader parse_header(InputFile& file) {
         if (!parse_positive_integer(word, size)) file.fail("DimSize: " + quote_excerpt(word) + " is not a positive integer");
         header.sizes.push_back(size);
     }
-    // Geometry is ITK's to read, but its values must be sane before ITK sees them.
+    // Geometry is ITK's to read, but its values must be sane before ITK sees them: one number a
+    // dimension, NDims² for a matrix.
     for (const char* key : {"Offset", "Position", "Origin", "ElementSpacing", "ElementSize", "TransformMatrix", "Rotation",
                             "Orientation", "CenterOfRotation"}) {
         const auto found = fields.find(to_lower(key));
-        if (found != fields.end()) check_geometry_numbers(file, std::string(key), found->second);
+        if (found == fields.end()) continue;
+        check_geometry_numbers(file, std::string(key), found->second);
+        const bool matrix = std::string(key) == "TransformMatrix" || std::string(key) == "Rotation" ||
+                            std::string(key) == "Orientation";
+        const std::size_t expected = static_cast<std::size_t>(matrix ? rank * rank : rank);
+        const std::size_t given = split_words(found->second).size();
+        if (given != expected)
+            file.fail(std::string(key) + " gives " + std::to_string(given) + " numbers for NDims = " + std::to_string(rank) +
+                      " (" + std::to_string(expected) + " expected)");
     }
     header.channels = integer_field(file, fields, "elementnumberofchannels", 1);
     if (header.channels < 1) file.fail("ElementNumberOfChannels must be at least 1");
