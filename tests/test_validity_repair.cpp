@@ -367,6 +367,12 @@ TEST_P(RealVolume, ComesOutValid) {
     EXPECT_EQ(v.intersecting_pairs, 0) << GetParam();
     EXPECT_EQ(v.degenerate_triangles, 0) << GetParam();
     EXPECT_EQ(v.folded_faces, 0) << GetParam();
+    // Exact: the minimizer of E' over the whole region, every part of it (lobster.vol's later
+    // exact solves leave the parts that did not change as they were).
+    if (result.validity->rounds > 0) {
+        EXPECT_TRUE(result.validity->exact) << GetParam();
+        EXPECT_LT(result.validity->max_kkt_residual, 1e-9) << GetParam();
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(SharedData, RealVolume,

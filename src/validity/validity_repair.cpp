@@ -136,7 +136,7 @@ public:
           input_field_(normals), field_(normals), targets_(repair_targets(surface, options.split_offset)),
           x_(flatten_points(positions)), factor_(std::size_t(surface.vertex_count()), 1.0),
           held_(std::size_t(surface.vertex_count()), 0), in_region_(std::size_t(surface.vertex_count()), 0),
-          corrected_(std::size_t(surface.face_count()), 0), local_(std::size_t(surface.vertex_count()), -1),
+          corrected_(std::size_t(surface.face_count()), 0), changed_(std::size_t(surface.vertex_count()), 1), local_(std::size_t(surface.vertex_count()), -1),
           mark_(std::size_t(surface.vertex_count()), 0),
           rows_(surface.quads, links_, input_field_, weights, surface.vertex_count()) {
         for (int t = 0; t < omp_get_max_threads(); ++t) row_scratch_.emplace_back(surface.vertex_count());
@@ -154,23 +154,33 @@ public:
         const auto started = Clock::now();
         moved_ = &moved;
         refield = correct_field(validity.folded, report);
+        for (const std::int32_t f : refield)
+            for (int k = 0; k < 4; ++k) changed_[std::size_t(surface_.quads(f, k))] = 1;
         const std::vector<std::int32_t> invalid = vertices_to_strengthen(validity);
         const std::vector<std::int32_t> strengthened = strengthen(invalid);
-        for (const std::int32_t v : rings_around(neighbours_, strengthened, o_.region_rings, mark_, [](std::int32_t) { return true; }))
+        for (const std::int32_t v : strengthened) changed_[std::size_t(v)] = 1;
+        for (const std::int32_t v : rings_around(neighbours_, strengthened, o_.region_rings, mark_, [](std::int32_t) { return true; })) {
+            if (!in_region_[std::size_t(v)]) changed_[std::size_t(v)] = 1;  // a new unknown of its part
             in_region_[std::size_t(v)] = 1;
+        }
         solve(rings_around(neighbours_, strengthened, o_.window_rings, mark_, [&](std::int32_t v) { return free_in_region(v); }),
               kRoundPartTolerance, report);
         report.solve_seconds += seconds_since(started);
     }
 
-    /// Solves the whole free region exactly (every part); `moved` receives the vertices moved.
+    /// Solves the whole free region exactly; `moved` receives the vertices moved. A part that
+    /// an earlier exact solve left at its minimizer, and whose system has not changed since (no
+    /// vertex of it or coupled to it moved or changed weight, no face of it changed field), is
+    /// left as it is: solving it again would give the same positions (lobster.vol: two of its three
+    /// large parts in the second and third exact solves).
     void solve_region(ValidityRepairReport& report, std::vector<std::int32_t>& moved) {
         const auto started = Clock::now();
         moved_ = &moved;
         std::vector<std::int32_t> region;
         for (std::size_t i = 0; i < in_region_.size(); ++i)
             if (free_in_region(std::int64_t(i))) region.push_back(std::int32_t(i));
-        solve(region, kExactPartTolerance, report);
+        solve(region, kExactPartTolerance, report, /*skip_unchanged=*/true);
+        std::fill(changed_.begin(), changed_.end(), 0);
         report.solve_seconds += seconds_since(started);
     }
 
@@ -210,6 +220,7 @@ public:
         std::vector<std::int32_t> changed;
         for (Eigen::Index v = 0; v < x.size() / 3; ++v)
             if (x.segment<3>(3 * v) != x_.segment<3>(3 * v)) changed.push_back(std::int32_t(v));
+        for (const std::int32_t v : changed) changed_[std::size_t(v)] = 1;
         x_ = x;
         return changed;
     }
@@ -291,6 +302,7 @@ private:
                 held_[std::size_t(v)] = 1;
                 x_.segment<3>(3 * Eigen::Index(v)) = targets_.row(v).transpose();
                 moved_->push_back(v);
+                changed_[std::size_t(v)] = 1;
             }
         }
         std::vector<std::int32_t> frontier = invalid;
@@ -316,24 +328,42 @@ private:
 
     /// Minimizes E' over `vertices` (sorted, free region vertices), every other vertex held:
     /// each connected part (under the coupling of R) on its own; `tolerance`: the relative residual
-    /// of the iterative solves of large parts.
-    void solve(const std::vector<std::int32_t>& vertices, double tolerance, ValidityRepairReport& report) {
+    /// of the iterative solves of large parts. With `skip_unchanged`, the parts whose system has
+    /// not changed since the last exact solve (changed_) are not solved again.
+    void solve(const std::vector<std::int32_t>& vertices, double tolerance, ValidityRepairReport& report,
+               bool skip_unchanged = false) {
         for (const std::int32_t v : vertices) mark_[std::size_t(v)] = 1;
         Parts parts(mark_.size());
+        std::vector<char> touched(vertices.size(), 0);  ///< the vertex or one coupled to it changed
         detail::RegularizationOperator::Row& row = row_scratch_.front();
-        for (const std::int32_t v : vertices) {
+        for (std::size_t k = 0; k < vertices.size(); ++k) {
+            const std::int32_t v = vertices[k];
             rows_.row(v, row, false);
-            for (const std::int32_t c : row.columns)
+            touched[k] = changed_[std::size_t(v)];
+            for (const std::int32_t c : row.columns) {
                 if (mark_[std::size_t(c)]) parts.unite(v, c);
+                touched[k] |= changed_[std::size_t(c)];
+            }
         }
         std::vector<std::int64_t> index_of_root(mark_.size(), -1);
         std::vector<std::vector<std::int32_t>> groups;
-        for (const std::int32_t v : vertices) {
-            std::int64_t& index = index_of_root[std::size_t(parts.find(v))];
-            if (index < 0) index = std::int64_t(groups.size()), groups.emplace_back();
-            groups[std::size_t(index)].push_back(v);
+        std::vector<char> group_touched;
+        for (std::size_t k = 0; k < vertices.size(); ++k) {
+            std::int64_t& index = index_of_root[std::size_t(parts.find(vertices[k]))];
+            if (index < 0) index = std::int64_t(groups.size()), groups.emplace_back(), group_touched.push_back(0);
+            groups[std::size_t(index)].push_back(vertices[k]);
+            group_touched[std::size_t(index)] |= touched[k];
         }
         for (const std::int32_t v : vertices) mark_[std::size_t(v)] = 0;
+        if (skip_unchanged) {
+            std::size_t kept = 0;
+            for (std::size_t k = 0; k < groups.size(); ++k) {
+                if (!group_touched[k]) continue;
+                if (k != kept) groups[kept].swap(groups[k]);
+                ++kept;
+            }
+            groups.resize(kept);
+        }
         // The parts share no unknown and no coupling: the small ones are solved side by side (each
         // reads the positions around it, which no other part writes), the large ones after.
         std::vector<std::size_t> small, large;
@@ -353,6 +383,7 @@ private:
         for (const std::size_t k : large) converged[k] = solve_part(groups[k], tolerance, moved[k]);
         for (std::size_t k = 0; k < groups.size(); ++k) {
             moved_->insert(moved_->end(), moved[k].begin(), moved[k].end());
+            for (const std::int32_t v : moved[k]) changed_[std::size_t(v)] = 1;
             report.converged = report.converged && converged[k];
         }
         report.parts_solved += std::int64_t(groups.size());
@@ -577,6 +608,9 @@ private:
     std::vector<char> held_;
     std::vector<char> in_region_;
     std::vector<char> corrected_;      ///< faces whose u was replaced
+    /// Vertices that moved, changed weight or hold, joined the region or touch a face whose field
+    /// changed since the last exact solve of the region.
+    std::vector<char> changed_;
     std::vector<std::int32_t> local_;  ///< index in the part being solved, −1 elsewhere
     std::vector<char> mark_;           ///< scratch, all 0 between calls
     detail::RegularizationOperator rows_;  ///< R of E, block row by block row
