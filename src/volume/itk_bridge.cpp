@@ -263,22 +263,21 @@ const char* itk_format_name(ItkFormat format) {
 namespace {
 
 /// What the child process of check_dicom_in_child_process does with one file: GDCM's reading of
-/// it as the parent's reader will do it (its header, then its voxels up to 256 MiB). Exceptions
-/// are the parent's reader's to report.
-void read_dicom_file_quietly(const std::string& path) {
+/// it as the parent's reader will do it (its header, then its voxels up to 256 MiB), with `io`,
+/// made before the fork. Exceptions are the parent's reader's to report.
+void read_dicom_file_quietly(itk::GDCMImageIO& io, const std::string& path) {
     constexpr itk::SizeValueType kLargestChildRead = itk::SizeValueType(256) << 20;
     try {
-        const itk::GDCMImageIO::Pointer io = itk::GDCMImageIO::New();
-        if (!io->CanReadFile(path.c_str())) return;
-        io->SetFileName(path);
-        io->ReadImageInformation();
-        const itk::SizeValueType bytes = io->GetImageSizeInBytes();
+        if (!io.CanReadFile(path.c_str())) return;
+        io.SetFileName(path);
+        io.ReadImageInformation();
+        const itk::SizeValueType bytes = io.GetImageSizeInBytes();
         if (bytes > kLargestChildRead) return;
         std::vector<char> buffer(static_cast<std::size_t>(bytes));
         std::vector<std::int64_t> sizes;
-        for (unsigned d = 0; d < io->GetNumberOfDimensions(); ++d) sizes.push_back(std::int64_t(io->GetDimensions(d)));
-        io->SetIORegion(slice_region(sizes, 0, sizes.size() >= 3 ? sizes[2] : 1));
-        io->Read(buffer.data());
+        for (unsigned d = 0; d < io.GetNumberOfDimensions(); ++d) sizes.push_back(std::int64_t(io.GetDimensions(d)));
+        io.SetIORegion(slice_region(sizes, 0, sizes.size() >= 3 ? sizes[2] : 1));
+        io.Read(buffer.data());
     } catch (...) {
     }
 }
@@ -287,6 +286,9 @@ void read_dicom_file_quietly(const std::string& path) {
 
 void check_dicom_in_child_process(const std::vector<std::string>& paths) {
     if (paths.empty()) return;
+    // Made here, not in the child: ITK's object factory takes a lock, which another thread of
+    // this process may hold at the fork (a child has only the forking thread: it would wait forever).
+    const itk::GDCMImageIO::Pointer io = itk::GDCMImageIO::New();
     int channel[2];  // the child writes the index of each file before reading it
     if (pipe(channel) != 0) return;  // no child process: the read that follows decides alone
     const pid_t child = fork();
@@ -304,7 +306,7 @@ void check_dicom_in_child_process(const std::vector<std::string>& paths) {
         silence_itk_warnings();
         for (std::uint32_t index = 0; index < paths.size(); ++index) {
             if (write(channel[1], &index, sizeof index) != ssize_t(sizeof index)) _exit(1);
-            read_dicom_file_quietly(paths[index]);
+            read_dicom_file_quietly(*io, paths[index]);
         }
         _exit(0);  // no exit handlers, no flush of the parent's buffers
     }
