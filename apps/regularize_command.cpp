@@ -90,6 +90,13 @@ void add_normal_field_options(CLI::App& cmd, NormalFieldOptions& o, PipelineOutp
         cmd.add_option("--feature-threshold", o.feature_threshold, "v below which a vertex is on a feature")
             ->capture_default_str(),
     };
+    CLI::Option* lift_margin = cmd.add_option("--field-lift-margin", o.lift_margin,
+                   "Estimated normals u with u.n_s below this (n_s: the axis normal of the face's voxel side, "
+                   "which the voxels make certain) are tilted to u.n_s = this: the faces that would fold "
+                   "(docs/accuracy.md, 'Field lift'); not --normals exact nor a --normals-file field. Default 0.05")
+        ->check(CLI::Range(0.0, 0.99));
+    cmd.add_flag_callback("--no-field-lift", [&o] { o.lift_margin.reset(); }, "Use the estimated normals as they are")
+        ->excludes(lift_margin);
     cmd.add_option("--export-normals", outputs.normals,
                    "Write the normal field used (after AT, if any) in the --normals-file format");
 }

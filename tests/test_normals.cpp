@@ -196,5 +196,44 @@ TEST(Normals, RadiusMustBePositive) {
     EXPECT_THROW(integral_invariant_normals(ball, s, 500.0), Error);  // tables of 500³ voxels: refused
 }
 
+TEST(Normals, LiftGivesTheNearestUnitVectorInTheSurfelsHalfSpaceAndLeavesTheOthers) {
+    const auto s = extract_digital_surface(test::make_ball(12, 4.5, 6), Connectivity::Six);
+    std::mt19937 random(7);
+    std::normal_distribution<double> gauss;
+    PointMatrix u(s.face_count(), 3);
+    for (std::int64_t f = 0; f < s.face_count(); ++f)
+        u.row(f) = Eigen::RowVector3d(gauss(random), gauss(random), gauss(random)).normalized();
+    const PointMatrix before = u;
+    const double margin = 0.05;
+    const std::int64_t lifted = lift_into_surfel_half_spaces(s, u, margin);
+    std::int64_t changed = 0;
+    for (std::int64_t f = 0; f < s.face_count(); ++f) {
+        const Eigen::Vector3d n = s.surfels[std::size_t(f)].trivial_normal();
+        const Eigen::Vector3d b = before.row(f).transpose(), a = u.row(f).transpose();
+        if (b.dot(n) >= margin) {
+            EXPECT_EQ(a, b) << "face " << f;
+            continue;
+        }
+        ++changed;
+        EXPECT_NEAR(a.norm(), 1.0, 1e-12);
+        EXPECT_NEAR(a.dot(n), margin, 1e-12);
+        // Same tangential direction, and no unit vector of the half-space is closer to b.
+        EXPECT_LT(((a - a.dot(n) * n).normalized() - (b - b.dot(n) * n).normalized()).norm(), 1e-9);
+        for (int trial = 0; trial < 20; ++trial) {
+            Eigen::Vector3d w(gauss(random), gauss(random), gauss(random));
+            w.normalize();
+            if (w.dot(n) < margin) w = (w - (w.dot(n) - margin - 0.5) * n).normalized();  // into the half-space
+            if (w.dot(n) < margin) continue;
+            EXPECT_GE(angle_deg(w, b), angle_deg(a, b) - 1e-9);
+        }
+    }
+    EXPECT_GT(changed, s.face_count() / 4);  // random vectors: about half are below
+    EXPECT_EQ(lifted, changed);
+    EXPECT_THROW(lift_into_surfel_half_spaces(s, u, 1.0), Error);
+    EXPECT_THROW(lift_into_surfel_half_spaces(s, u, -0.1), Error);
+    PointMatrix short_field = u.topRows(3);
+    EXPECT_THROW(lift_into_surfel_half_spaces(s, short_field, margin), Error);
+}
+
 }  // namespace
 }  // namespace dsreg

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <random>
 
 #include "dsreg/adaptive_normals.hpp"
 #include "dsreg/error.hpp"
@@ -38,24 +39,29 @@ TEST(Pipeline, EqualsTheStagesCalledByHand) {
     options.solver = SolverKind::Cholmod;
     const PipelineResult result = run_pipeline(loaded, options);
 
-    // The defaults by hand: the adaptive integral invariants, the thin-part data weights from
-    // their reach (reference 12 voxels), the solve, the shrink correction (40 steps).
+    // The defaults by hand: the adaptive integral invariants lifted into the surfels' half-spaces
+    // (margin 0.05), the thin-part data weights from their reach (reference 12 voxels), the
+    // solve, the shrink correction (40 steps).
     const DigitalSurface surface = extract_digital_surface(loaded.volume, Connectivity::TwentySix);
     const AdaptiveNormalOptions adaptive = default_adaptive_options(options.normals, loaded);
     EXPECT_DOUBLE_EQ(adaptive.max_radius, 14.0);  // voxels of a file
     const AdaptiveNormalField field = adaptive_integral_invariant_normals(loaded.volume, surface, adaptive);
+    PointMatrix normals = field.normals;
+    ASSERT_TRUE(options.normals.lift_margin.has_value());
+    EXPECT_EQ(*options.normals.lift_margin, 0.05);
+    EXPECT_EQ(lift_into_surfel_half_spaces(surface, normals, *options.normals.lift_margin), result.field.lifted_faces);
     RegularizationWeights weights;
     weights.alpha = options.alpha;  // the pipeline's defaults (docs/accuracy.md), not the paper's
     weights.gamma = options.gamma;
     weights.vertex_alpha = thin_part_alpha(surface, field.reach.smallest(), 12.0);
     SolverOptions solver;
     solver.kind = SolverKind::Cholmod;
-    const RegularizationResult solved = regularize(surface, field.normals, weights, solver);
-    const ShrinkCorrection expected = correct_shrink(surface, solved.positions, field.normals, 40);
+    const RegularizationResult solved = regularize(surface, normals, weights, solver);
+    const ShrinkCorrection expected = correct_shrink(surface, solved.positions, normals, 40);
 
     ASSERT_EQ(result.surface.face_count(), surface.face_count());
     EXPECT_EQ((result.surface.quads - surface.quads).cwiseAbs().maxCoeff(), 0);
-    EXPECT_LT((result.field.normals - field.normals).cwiseAbs().maxCoeff(), 1e-15);
+    EXPECT_LT((result.field.normals - normals).cwiseAbs().maxCoeff(), 1e-15);
     EXPECT_LT((result.weights.vertex_alpha - weights.vertex_alpha).cwiseAbs().maxCoeff(), 1e-15);
     EXPECT_LT((result.regularization.positions - expected.positions).cwiseAbs().maxCoeff(), 1e-12);
     EXPECT_EQ(result.object_voxels, loaded.volume.object_voxel_count());
@@ -263,6 +269,48 @@ TEST(Pipeline, WithoutAMeshPathOnlyTheOtherOutputsAreWritten) {
     for (const auto& entry : std::filesystem::directory_iterator(folder)) written.push_back(entry.path().filename());
     EXPECT_EQ(written, std::vector<std::filesystem::path>{"r.json"});
     EXPECT_EQ(result.stage_seconds.back().first, "write");
+}
+
+/// A ball of radius 9 voxels whose voxels next to the surface are flipped with probability 0.2:
+/// noise that turns many estimated normals into or along their faces.
+LoadedVolume loaded_noisy_ball() {
+    LoadedVolume loaded = loaded_ball();
+    loaded.volume = test::make_ball(24, 9.0, 12.0);
+    std::mt19937 random(11);
+    std::bernoulli_distribution flip(0.2);
+    const BinaryVolume clean = loaded.volume;
+    const auto& dims = clean.grid.dims;
+    for (std::int64_t k = 1; k + 1 < dims[2]; ++k)
+        for (std::int64_t j = 1; j + 1 < dims[1]; ++j)
+            for (std::int64_t i = 1; i + 1 < dims[0]; ++i) {
+                const bool border = clean.inside(i, j, k) != clean.inside(i + 1, j, k) ||
+                                    clean.inside(i, j, k) != clean.inside(i, j + 1, k) ||
+                                    clean.inside(i, j, k) != clean.inside(i, j, k + 1);
+                if (border && flip(random))
+                    loaded.volume.mask[std::size_t(clean.grid.linear_index(i, j, k))] = clean.inside(i, j, k) ? 0 : 1;
+            }
+    return loaded;
+}
+
+TEST(Pipeline, EstimatedFieldsAreLiftedIntoTheSurfelsHalfSpacesAndOnlyThere) {
+    const LoadedVolume loaded = loaded_noisy_ball();
+    PipelineOptions options;
+    options.validity = ValidityMode::Off;  // the field is the subject: the lift, not what the repair does after
+    const PipelineResult lifted = run_pipeline(loaded, options);
+    options.normals.lift_margin.reset();
+    const PipelineResult raw = run_pipeline(loaded, options);
+    ASSERT_EQ(lifted.surface.face_count(), raw.surface.face_count());
+    EXPECT_EQ(raw.field.lifted_faces, 0);
+    std::int64_t below = 0;
+    for (std::int64_t f = 0; f < raw.surface.face_count(); ++f) {
+        const Eigen::Vector3d n = raw.surface.surfels[std::size_t(f)].trivial_normal();
+        const Eigen::RowVector3d u = raw.field.normals.row(f), w = lifted.field.normals.row(f);
+        EXPECT_GE(w.dot(n.transpose()), 0.05 - 1e-12) << "face " << f;
+        if (u.dot(n.transpose()) < 0.05) ++below;
+        else EXPECT_EQ(w, u) << "face " << f;  // the others bit for bit
+    }
+    EXPECT_GT(below, 0);  // the noise made some
+    EXPECT_EQ(lifted.field.lifted_faces, below);
 }
 
 }  // namespace

@@ -15,6 +15,21 @@ namespace dsreg {
 /// The axis-aligned normal of each surfel.
 PointMatrix trivial_normals(const DigitalSurface& surface);
 
+/// The unit vector nearest to u with u·n ≥ margin: u itself if it qualifies, else its tangential
+/// direction tilted to u·n = margin (n itself when u = −n). n unit, margin in [0, 1).
+Eigen::Vector3d lift_into_half_space(const Eigen::Vector3d& u, const Eigen::Vector3d& n, double margin);
+
+/// What the voxels say of every face's normal: the segment from the centre of the object voxel
+/// behind a surfel to the centre of the background voxel in front of it crosses the boundary
+/// outwards, so where it crosses the true normal n has n·n_s ≥ 0 (n_s the surfel's trivial
+/// normal). Each row u_f with u_f·n_s < margin (an estimate pointing into the object, or almost
+/// along the face: noise, parts thinner than the estimator's reach) becomes
+/// lift_into_half_space(u_f, n_s, margin); the others are left as they are, bit for bit. Returns
+/// how many rows changed. The pipeline does this to the estimated fields with margin 0.05
+/// (docs/accuracy.md, "Field lift"): the faces it changes are those that would fold in the solve.
+/// Throws dsreg::Error for a field of the wrong size or a margin outside [0, 1).
+std::int64_t lift_into_surfel_half_spaces(const DigitalSurface& surface, PointMatrix& normals, double margin);
+
 enum class IntegralInvariantKernel;
 
 /// Convolved trivial normals: for each surfel, the normalized sum of the trivial normals of the

@@ -158,6 +158,10 @@ struct NormalFieldOptions {
     std::string file;                     ///< --normals-file: g (with --normals at) or the field itself
     AmbrosioTortorelliParameters at;      ///< --at-alpha, --at-lambda, --at-eps, --at-eps-ratio
     double feature_threshold = 0.5;       ///< --feature-threshold: v below it marks a feature vertex
+    /// --field-lift-margin / --no-field-lift: estimated fields (not --normals exact or a normals
+    /// file) are lifted into the surfels' half-spaces, u·n_s ≥ this (lift_into_surfel_half_spaces,
+    /// normals.hpp); unset = no lift. 0.05 chosen on the accuracy suite (docs/accuracy.md).
+    std::optional<double> lift_margin = 0.05;
 };
 
 /// "2:0.25" → ε from 2 down to 0.25; "0.5" → 0.5 throughout (the --at-eps syntax). Throws
@@ -208,6 +212,8 @@ struct NormalField {
     /// Label maps: faces near a junction given the convolved trivial normals of their own
     /// interface (use_interface_normals_near_junctions, normals.hpp).
     std::int64_t interface_normal_faces = 0;
+    /// Faces whose estimate was lifted into their surfel's half-space (NormalFieldOptions::lift_margin).
+    std::int64_t lifted_faces = 0;
 };
 
 // ---------------------------------------------------------------------------------------------

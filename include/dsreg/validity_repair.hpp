@@ -57,6 +57,7 @@
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/mesh.hpp"
 #include "dsreg/mesh_validity.hpp"
+#include "dsreg/normals.hpp"  // lift_into_half_space
 #include "dsreg/progress.hpp"
 #include "dsreg/regularization.hpp"
 
@@ -118,9 +119,5 @@ ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointM
 /// The targets t of the repair: the digital positions, the copies of each split pointel moved
 /// `split_offset` voxel (along each axis, times the spacing) towards the centroid of their faces.
 PointMatrix repair_targets(const DigitalSurface& surface, double split_offset);
-
-/// The unit vector nearest to u with u·n ≥ margin: u itself if it qualifies, else its tangential
-/// direction tilted to u·n = margin (n itself when u = −n). n unit, margin in [0, 1).
-Eigen::Vector3d lift_into_half_space(const Eigen::Vector3d& u, const Eigen::Vector3d& n, double margin);
 
 }  // namespace dsreg

@@ -1,5 +1,10 @@
 #include "dsreg/normals.hpp"
 
+#include <cmath>
+#include <string>
+
+#include "dsreg/error.hpp"
+
 namespace dsreg {
 
 PointMatrix trivial_normals(const DigitalSurface& surface) {
@@ -7,6 +12,31 @@ PointMatrix trivial_normals(const DigitalSurface& surface) {
     for (std::int64_t f = 0; f < surface.face_count(); ++f)
         u.row(f) = surface.surfels[std::size_t(f)].trivial_normal().transpose();
     return u;
+}
+
+Eigen::Vector3d lift_into_half_space(const Eigen::Vector3d& u, const Eigen::Vector3d& n, double margin) {
+    const double along = u.dot(n);
+    if (along >= margin) return u;
+    const Eigen::Vector3d tangential = u - along * n;
+    const double length = tangential.norm();
+    if (!(length > 1e-12)) return n;
+    return std::sqrt(1 - margin * margin) * tangential / length + margin * n;
+}
+
+std::int64_t lift_into_surfel_half_spaces(const DigitalSurface& surface, PointMatrix& normals, double margin) {
+    if (normals.rows() != surface.face_count() || normals.cols() != 3)
+        throw Error("field lift: " + std::to_string(normals.rows()) + " normals for " + std::to_string(surface.face_count()) +
+                    " faces");
+    if (!(margin >= 0 && margin < 1)) throw Error("field lift: the margin must be in [0, 1)");
+    std::int64_t lifted = 0;
+    for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+        const Eigen::Vector3d n = surface.surfels[std::size_t(f)].trivial_normal();
+        const Eigen::Vector3d u = normals.row(f).transpose();
+        if (u.dot(n) >= margin) continue;
+        normals.row(f) = lift_into_half_space(u, n, margin).transpose();
+        ++lifted;
+    }
+    return lifted;
 }
 
 PointMatrix exact_normals(const ImplicitShape& shape, const DigitalSurface& surface) {

@@ -207,21 +207,33 @@ void check_normal_field_options(const NormalFieldOptions& o, bool input_is_shape
         throw FileError("--normals-file " + o.file + ": cannot open the file", errno);
 }
 
+/// The lift of an estimated field into the surfels' half-spaces (not of the true normals of
+/// --normals exact, nor of a file's field, which are the user's).
+void lift_estimated_field(const NormalFieldOptions& o, const DigitalSurface& surface, NormalField& field) {
+    if (!o.lift_margin || field_kind(o) == "exact" || (field_kind(o) != "at" && input_kind(o) == "file")) return;
+    field.lifted_faces = lift_into_surfel_half_spaces(surface, field.normals, *o.lift_margin);
+    if (field.lifted_faces > 0)
+        field.description += "; " + std::to_string(field.lifted_faces) + " faces lifted to u.n >= " + format("%g", *o.lift_margin);
+}
+
 NormalField compute_normal_field(const NormalFieldOptions& o, const LoadedVolume& loaded, const DigitalSurface& surface,
                                  StageClock& clock) {
     NormalField field;
     clock.start("normals");
     PointMatrix g = estimate_input_field(o, loaded, surface, field);
-    clock.finish(field.description);
     if (field_kind(o) != "at") {
         field.normals = std::move(g);
+        lift_estimated_field(o, surface, field);
+        clock.finish(field.description);
         return field;
     }
+    clock.finish(field.description);
     clock.start("at");
     field.at = ambrosio_tortorelli_normals(surface, g, o.at);
-    clock.finish(at_stage_detail(*field.at, o.feature_threshold));
     field.normals = field.at->normals;
     field.description = "Ambrosio-Tortorelli of " + field.description;
+    lift_estimated_field(o, surface, field);
+    clock.finish(at_stage_detail(*field.at, o.feature_threshold));
     return field;
 }
 

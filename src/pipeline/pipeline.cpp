@@ -467,6 +467,8 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
                             {"radius", optional_json(field.radius)},
                             {"ii_kernel", field.ii_kernel ? nlohmann::json(*field.ii_kernel) : nlohmann::json(nullptr)},
                             {"ii_extrapolated", field.ii_extrapolated},
+                            {"field_lift_margin", optional_json(o.normals.lift_margin)},
+                            {"lifted_faces", field.lifted_faces},
                             {"solver", solve.solver}, {"max_error_voxels", o.max_error_voxels},
                             {"triangulate", outputs.triangulate}};
     if (field.adaptive) {

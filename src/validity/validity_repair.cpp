@@ -620,15 +620,6 @@ private:
 
 }  // namespace
 
-Eigen::Vector3d lift_into_half_space(const Eigen::Vector3d& u, const Eigen::Vector3d& n, double margin) {
-    const double along = u.dot(n);
-    if (along >= margin) return u;
-    const Eigen::Vector3d tangential = u - along * n;
-    const double length = tangential.norm();
-    if (!(length > 1e-12)) return n;
-    return std::sqrt(1 - margin * margin) * tangential / length + margin * n;
-}
-
 PointMatrix repair_targets(const DigitalSurface& surface, double split_offset) {
     const std::int64_t n = surface.vertex_count();
     // Vertices sorted by pointel: runs of more than one are the copies of a split pointel.
