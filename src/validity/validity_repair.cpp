@@ -136,8 +136,8 @@ public:
           input_field_(normals), field_(normals), targets_(repair_targets(surface, options.split_offset)),
           x_(flatten_points(positions)), factor_(std::size_t(surface.vertex_count()), 1.0),
           held_(std::size_t(surface.vertex_count()), 0), in_region_(std::size_t(surface.vertex_count()), 0),
-          corrected_(std::size_t(surface.face_count()), 0), changed_(std::size_t(surface.vertex_count()), 1), local_(std::size_t(surface.vertex_count()), -1),
-          mark_(std::size_t(surface.vertex_count()), 0),
+          corrected_(std::size_t(surface.face_count()), 0), changed_(std::size_t(surface.vertex_count()), 1),
+          local_(std::size_t(surface.vertex_count()), -1), mark_(std::size_t(surface.vertex_count()), 0),
           rows_(surface.quads, links_, input_field_, weights, surface.vertex_count()) {
         for (int t = 0; t < omp_get_max_threads(); ++t) row_scratch_.emplace_back(surface.vertex_count());
         faces_of_vertex_.assign(std::size_t(surface.vertex_count()), {});
