@@ -45,11 +45,20 @@ constexpr std::size_t kMaxTextValueBytes = 200;  ///< a value that is not a list
 /// Keys whose values MetaIO reads as lists of numbers, one per dimension (or NDims² for a
 /// matrix): the only values allowed to be long. Every other value is copied by MetaIO into a
 /// 255-byte field (Comment, Name…) or is a single word.
+/// The keys MetaIO reads as lists of numbers (their values may be long), with how many numbers
+/// each must give: one per dimension, or NDims² for a matrix. DimSize is checked on its own.
+struct NumberListKey {
+    const char* name;
+    bool matrix;
+};
+constexpr NumberListKey kGeometryKeys[] = {{"Offset", false},         {"Position", false},         {"Origin", false},
+                                           {"ElementSpacing", false}, {"ElementSize", false},      {"TransformMatrix", true},
+                                           {"Rotation", true},        {"Orientation", true},       {"CenterOfRotation", false}};
+
 bool is_number_list_key(const std::string& lower_key) {
-    static const char* const keys[] = {"dimsize",         "offset",      "position",    "origin",          "elementspacing",
-                                       "elementsize",     "transformmatrix", "rotation", "orientation", "centerofrotation"};
-    for (const char* key : keys)
-        if (lower_key == key) return true;
+    if (lower_key == "dimsize") return true;
+    for (const NumberListKey& key : kGeometryKeys)
+        if (lower_key == to_lower(key.name)) return true;
     return false;
 }
 
@@ -144,17 +153,14 @@ MetaHeader parse_header(InputFile& file) {
     }
     // Geometry is ITK's to read, but its values must be sane before ITK sees them: one number a
     // dimension, NDims² for a matrix.
-    for (const char* key : {"Offset", "Position", "Origin", "ElementSpacing", "ElementSize", "TransformMatrix", "Rotation",
-                            "Orientation", "CenterOfRotation"}) {
-        const auto found = fields.find(to_lower(key));
+    for (const NumberListKey& key : kGeometryKeys) {
+        const auto found = fields.find(to_lower(key.name));
         if (found == fields.end()) continue;
-        check_geometry_numbers(file, std::string(key), found->second);
-        const bool matrix = std::string(key) == "TransformMatrix" || std::string(key) == "Rotation" ||
-                            std::string(key) == "Orientation";
-        const std::size_t expected = static_cast<std::size_t>(matrix ? rank * rank : rank);
+        check_geometry_numbers(file, std::string(key.name), found->second);
+        const std::size_t expected = static_cast<std::size_t>(key.matrix ? rank * rank : rank);
         const std::size_t given = split_words(found->second).size();
         if (given != expected)
-            file.fail(std::string(key) + " gives " + std::to_string(given) + " numbers for NDims = " + std::to_string(rank) +
+            file.fail(std::string(key.name) + " gives " + std::to_string(given) + " numbers for NDims = " + std::to_string(rank) +
                       " (" + std::to_string(expected) + " expected)");
     }
     header.channels = integer_field(file, fields, "elementnumberofchannels", 1);
