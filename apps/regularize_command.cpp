@@ -120,6 +120,10 @@ void add_regularization_extension_options(CLI::App& command, RegularizationExten
                        "Steps of averaging of the drift of the regularized surface along u, which is then removed "
                        "(the solve's result lies slightly inside the digital surface; docs/accuracy.md); 0 = off. "
                        "Default 40, off with --clamp");
+    command.add_option("--noise-fairness", o.noise_fairness,
+                       "Noisy voxels: the fairness of a vertex where a share rho of the faces around it have an estimated "
+                       "normal pointing into the object is weighted 1 + G min(1, rho/0.02)^2 (docs/accuracy.md); 0 = off. "
+                       "Default 12");
     command.add_option("--metric", o.metric, "Metrics W0, W2: identity (paper) or area (estimated face and dual vertex areas)")
         ->check(CLI::IsMember(metric_names()))
         ->capture_default_str();

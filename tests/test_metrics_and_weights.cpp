@@ -222,6 +222,54 @@ TEST(LocalWeights, ValidationOfTheMultipliers) {
     EXPECT_THROW(validate_weights(w, n, m), Error);
 }
 
+TEST(LocalWeights, NoiseFairnessRisesAroundFacesAgainstTheirSurfelsOnly) {
+    const auto s = extract_digital_surface(test::make_ball(16, 6.5, 8), Connectivity::Six);
+    const Eigen::VectorXd clean = noise_fairness_gamma(s, {}, 10, 0.02, 3);
+    EXPECT_EQ(clean, Eigen::VectorXd::Ones(s.vertex_count()));
+    const std::int32_t noisy_face = 0;
+    const Eigen::VectorXd one = noise_fairness_gamma(s, {noisy_face}, 10, 0.02, 3);
+    ASSERT_EQ(one.size(), s.vertex_count());
+    // Vertex distance (in edges) from the noisy face's corners.
+    std::vector<int> hops(std::size_t(s.vertex_count()), -1);
+    std::vector<std::int32_t> front;
+    for (int k = 0; k < 4; ++k) {
+        hops[std::size_t(s.quads(noisy_face, k))] = 0;
+        front.push_back(s.quads(noisy_face, k));
+    }
+    for (int step = 1; !front.empty(); ++step) {
+        std::vector<std::int32_t> next;
+        for (std::int64_t f = 0; f < s.face_count(); ++f)
+            for (int k = 0; k < 4; ++k) {
+                const std::int32_t a = s.quads(f, k), b = s.quads(f, (k + 1) % 4);
+                for (const auto& [from, to] : {std::pair{a, b}, std::pair{b, a}})
+                    if (hops[std::size_t(from)] == step - 1 && hops[std::size_t(to)] < 0) {
+                        hops[std::size_t(to)] = step;
+                        next.push_back(to);
+                    }
+            }
+        front = next;
+    }
+    std::int64_t raised = 0;
+    for (std::int64_t v = 0; v < s.vertex_count(); ++v) {
+        raised += one[v] > 1.0;
+        EXPECT_GE(one[v], 1.0);
+        EXPECT_LE(one[v], 11.0);
+        if (hops[std::size_t(v)] == 0) EXPECT_DOUBLE_EQ(one[v], 11.0) << "a corner of the face: a share above 0.02";
+        // Each of the 3 passes reaches the faces around the vertices reached: 2 edges further at most.
+        if (hops[std::size_t(v)] > 6) EXPECT_EQ(one[v], 1.0) << "vertex " << v << ", " << hops[std::size_t(v)] << " edges away";
+    }
+    EXPECT_GT(raised, 20);
+    EXPECT_LT(raised, s.vertex_count() / 2);
+    // The gain scales the rise; 0 turns it off.
+    const Eigen::VectorXd doubled = noise_fairness_gamma(s, {noisy_face}, 20, 0.02, 3);
+    EXPECT_LT(((doubled.array() - 1) - 2 * (one.array() - 1)).abs().maxCoeff(), 1e-12);
+    EXPECT_EQ(noise_fairness_gamma(s, {noisy_face}, 0, 0.02, 3), Eigen::VectorXd::Ones(s.vertex_count()));
+    EXPECT_THROW(noise_fairness_gamma(s, {noisy_face}, -1, 0.02, 3), Error);
+    EXPECT_THROW(noise_fairness_gamma(s, {noisy_face}, 10, 0, 3), Error);
+    EXPECT_THROW(noise_fairness_gamma(s, {noisy_face}, 10, 0.02, -1), Error);
+    EXPECT_THROW(noise_fairness_gamma(s, {std::int32_t(s.face_count())}, 10, 0.02, 3), Error);
+}
+
 TEST(LocalWeights, VolumeSampledAroundEachPointel) {
     const Ball b = small_ball();
     ScalarVolume map;

@@ -235,5 +235,23 @@ TEST(Normals, LiftGivesTheNearestUnitVectorInTheSurfelsHalfSpaceAndLeavesTheOthe
     EXPECT_THROW(lift_into_surfel_half_spaces(s, short_field, margin), Error);
 }
 
+TEST(Normals, FacesAgainstTheirSurfelsAreThoseWhoseFieldPointsIntoTheObject) {
+    const auto s = extract_digital_surface(test::make_ball(12, 4.5, 6), Connectivity::Six);
+    PointMatrix u = trivial_normals(s);
+    EXPECT_TRUE(faces_against_their_surfels(s, u).empty());
+    const std::vector<std::int32_t> turned{0, 5, std::int32_t(s.face_count() - 1)};
+    for (const std::int32_t f : turned) u.row(f) = -u.row(f);
+    u.row(7) = Eigen::RowVector3d(u(7, 1), u(7, 2), u(7, 0));  // along the face: u·n = 0, not against
+    EXPECT_EQ(faces_against_their_surfels(s, u), turned);
+    PointMatrix short_field = u.topRows(3);
+    EXPECT_THROW(faces_against_their_surfels(s, short_field), Error);
+    // One face lifted alone, as the whole-field lift does it.
+    PointMatrix one = u;
+    EXPECT_TRUE(lift_into_surfel_half_space(s, one, 7, 0.05));
+    EXPECT_NEAR(one.row(7).dot(s.surfels[7].trivial_normal().transpose()), 0.05, 1e-12);
+    EXPECT_FALSE(lift_into_surfel_half_space(s, one, 1, 0.05));
+    EXPECT_EQ(one.row(1), u.row(1));
+}
+
 }  // namespace
 }  // namespace dsreg

@@ -2,6 +2,8 @@
 // by hand, its progress events, interruption, option checks and outputs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -9,6 +11,7 @@
 
 #include "dsreg/adaptive_normals.hpp"
 #include "dsreg/error.hpp"
+#include "dsreg/evaluation.hpp"
 #include "dsreg/local_weights.hpp"
 #include "dsreg/shrink_correction.hpp"
 #include "dsreg/mesh_io.hpp"
@@ -49,10 +52,13 @@ TEST(Pipeline, EqualsTheStagesCalledByHand) {
     PointMatrix normals = field.normals;
     ASSERT_TRUE(options.normals.lift_margin.has_value());
     EXPECT_EQ(*options.normals.lift_margin, 0.05);
+    const std::vector<std::int32_t> against = faces_against_their_surfels(surface, normals);  // before the lift
+    EXPECT_EQ(result.field.faces_against_surfels, against);
     EXPECT_EQ(lift_into_surfel_half_spaces(surface, normals, *options.normals.lift_margin), result.field.lifted_faces);
     RegularizationWeights weights;
     weights.alpha = options.alpha;  // the pipeline's defaults (docs/accuracy.md), not the paper's
     weights.gamma = options.gamma;
+    if (!against.empty()) weights.vertex_gamma = noise_fairness_gamma(surface, against, 12, 0.02, 3);
     weights.vertex_alpha = thin_part_alpha(surface, field.reach.smallest(), 12.0);
     SolverOptions solver;
     solver.kind = SolverKind::Cholmod;
@@ -63,6 +69,7 @@ TEST(Pipeline, EqualsTheStagesCalledByHand) {
     EXPECT_EQ((result.surface.quads - surface.quads).cwiseAbs().maxCoeff(), 0);
     EXPECT_LT((result.field.normals - normals).cwiseAbs().maxCoeff(), 1e-15);
     EXPECT_LT((result.weights.vertex_alpha - weights.vertex_alpha).cwiseAbs().maxCoeff(), 1e-15);
+    EXPECT_EQ(result.weights.vertex_gamma, weights.vertex_gamma);
     EXPECT_LT((result.regularization.positions - expected.positions).cwiseAbs().maxCoeff(), 1e-12);
     EXPECT_EQ(result.object_voxels, loaded.volume.object_voxel_count());
     EXPECT_EQ(result.faces_against_field, 0);
@@ -311,6 +318,46 @@ TEST(Pipeline, EstimatedFieldsAreLiftedIntoTheSurfelsHalfSpacesAndOnlyThere) {
     }
     EXPECT_GT(below, 0);  // the noise made some
     EXPECT_EQ(lifted.field.lifted_faces, below);
+}
+
+/// Mean angle (degrees) between the faces' normals and the sphere's (centre c) at their centroids.
+double mean_normal_error_deg(const PipelineResult& r, const Eigen::RowVector3d& c) {
+    const PointMatrix normals = face_normals(r.regularization.positions, r.surface.quads);
+    double sum = 0;
+    for (std::int64_t f = 0; f < r.surface.face_count(); ++f) {
+        Eigen::RowVector3d centroid = Eigen::RowVector3d::Zero();
+        for (int k = 0; k < 4; ++k) centroid += r.regularization.positions.row(r.surface.quads(f, k)) / 4;
+        const double cosine = std::clamp(normals.row(f).dot((centroid - c).normalized()), -1.0, 1.0);
+        sum += std::acos(cosine) * 180 / M_PI;
+    }
+    return sum / double(r.surface.face_count());
+}
+
+TEST(Pipeline, NoiseFairnessStraightensTheNoisyBallAndLeavesTheCleanOneAlone) {
+    PipelineOptions options;
+    options.solver = SolverKind::Cholmod;
+    const LoadedVolume noisy = loaded_noisy_ball();
+    const PipelineResult with = run_pipeline(noisy, options);
+    options.extensions.noise_fairness = 0.0;
+    const PipelineResult without = run_pipeline(noisy, options);
+    ASSERT_GT(with.field.faces_against_surfels.size(), std::size_t(with.surface.face_count() / 20));
+    EXPECT_EQ(with.field.faces_against_surfels, without.field.faces_against_surfels);
+    EXPECT_EQ(without.weights.vertex_gamma.size(), 0);
+    ASSERT_EQ(with.weights.vertex_gamma.size(), with.surface.vertex_count());
+    EXPECT_LE(with.weights.vertex_gamma.maxCoeff(), 13.0);
+    const Eigen::RowVector3d centre(12, 12, 12);
+    const double error_with = mean_normal_error_deg(with, centre), error_without = mean_normal_error_deg(without, centre);
+    EXPECT_LT(error_with, 0.8 * error_without) << error_with << "° against " << error_without << "°";
+    EXPECT_EQ(with.faces_against_field, 0);
+    ASSERT_TRUE(with.validity.has_value());
+    EXPECT_TRUE(with.validity->after.valid());
+
+    // A clean digitization has no face against its surfel: the same mesh, bit for bit.
+    const PipelineResult clean_without = run_pipeline(loaded_ball(), options);
+    options.extensions.noise_fairness.reset();
+    const PipelineResult clean_with = run_pipeline(loaded_ball(), options);
+    EXPECT_TRUE(clean_with.field.faces_against_surfels.empty());
+    EXPECT_EQ(clean_with.regularization.positions, clean_without.regularization.positions);
 }
 
 }  // namespace

@@ -1,7 +1,7 @@
 // dsreg — sources of the local multipliers α_i, β_f, γ_i of the regularization energy
 // (RegularizationWeights::vertex_alpha, face_beta, vertex_gamma; beyond the paper).
 //
-// Three sources:
+// Four sources:
 //  * a scalar volume on the same voxel grid as the binary volume the surface came from (e.g. a
 //    confidence or probability map of a segmentation), sampled at the vertices: the value of a
 //    vertex is the mean of the values of the 8 voxels around its pointel — voxels (a−1 … a,
@@ -12,7 +12,9 @@
 //    written mesh files. Numbers are separated by whitespace; '#' starts a comment that runs to
 //    the end of the line.
 //  * the local reach of the surface (local_reach.hpp): a stronger data term on thin parts
-//    (thin_part_alpha).
+//    (thin_part_alpha);
+//  * the faces whose estimated normal points against their surfel: a stronger fairness term
+//    where the voxels are noisy (noise_fairness_gamma).
 // Values are used as given (dimensionless multipliers); validate_weights() rejects α_i ≤ 0 and
 // β_f, γ_i < 0.
 #pragma once
@@ -20,6 +22,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/mesh.hpp"
@@ -48,6 +51,18 @@ Eigen::VectorXd read_values_file(const std::string& path, std::int64_t expected_
 /// balance, and so the relative shrink, no longer depends on the thickness (docs/accuracy.md).
 /// Throws dsreg::Error for a reference that is not positive and finite or a wrong face count.
 Eigen::VectorXd thin_part_alpha(const DigitalSurface& surface, const Eigen::VectorXd& face_reach, double reference);
+
+/// The fairness multipliers γ_i = 1 + gain · min(1, ρ_i / full_share)² where the voxels are
+/// noisy. ρ_i is the share of faces pointing against their surfel (faces_against_their_surfels,
+/// normals.hpp) around vertex i: the indicator of those faces averaged from faces to vertices and
+/// back `rings` times, then to the vertices (each pass widens the neighbourhood by about one
+/// ring). Why: on a bump or a pit of flipped voxels the alignment term flattens the quads along u
+/// and collapses their side walls into slivers of arbitrary normal, which only the fairness term
+/// spreads out again; a clean digitization of a smooth object has next to no such faces, so its
+/// weights stay 1 (docs/accuracy.md, "Noisy voxels"). Throws dsreg::Error for a negative or
+/// non-finite gain, a full share outside (0, 1], rings < 0 or a face index out of range.
+Eigen::VectorXd noise_fairness_gamma(const DigitalSurface& surface, const std::vector<std::int32_t>& faces_against_surfels,
+                                     double gain, double full_share, int rings);
 
 /// Writes one value per line with 17 significant digits, so read_values_file() gives back the
 /// same doubles (atomic write).

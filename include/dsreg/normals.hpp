@@ -3,7 +3,9 @@
 // All fields are oriented outward (from object to background) and are returned as an m×3
 // matrix whose row f is the normal of face f of the DigitalSurface.
 #pragma once
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/implicit_shape.hpp"
@@ -29,6 +31,16 @@ Eigen::Vector3d lift_into_half_space(const Eigen::Vector3d& u, const Eigen::Vect
 /// (docs/accuracy.md, "Field lift"): the faces it changes are those that would fold in the solve.
 /// Throws dsreg::Error for a field of the wrong size or a margin outside [0, 1).
 std::int64_t lift_into_surfel_half_spaces(const DigitalSurface& surface, PointMatrix& normals, double margin);
+
+/// Lifts row f alone, as lift_into_surfel_half_spaces() does; returns whether it changed.
+bool lift_into_surfel_half_space(const DigitalSurface& surface, PointMatrix& normals, std::int64_t f, double margin);
+
+/// The faces (ascending) whose field points into the object: u_f·n_s < 0. A good estimate of a
+/// clean digitization has almost none (the voxels guarantee n·n_s ≥ 0, see above); where the
+/// voxels are noisy, the bumps and pits of flipped voxels give many (about a fifth of the faces
+/// of a sphere with a fifth of its boundary voxels flipped). Throws dsreg::Error for a field of
+/// the wrong size.
+std::vector<std::int32_t> faces_against_their_surfels(const DigitalSurface& surface, const PointMatrix& normals);
 
 enum class IntegralInvariantKernel;
 

@@ -214,6 +214,9 @@ struct NormalField {
     std::int64_t interface_normal_faces = 0;
     /// Faces whose estimate was lifted into their surfel's half-space (NormalFieldOptions::lift_margin).
     std::int64_t lifted_faces = 0;
+    /// Faces whose estimate pointed into the object before the lift (faces_against_their_surfels,
+    /// normals.hpp): the noise measure of the fairness multipliers; empty for fields not lifted.
+    std::vector<std::int32_t> faces_against_surfels;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -233,6 +236,10 @@ struct RegularizationExtensions {
     /// --shrink-correction: averaging steps of correct_shrink (shrink_correction.hpp) applied to
     /// the solve's result; unset = 40 (off with --clamp, whose boxes it could leave); 0 = off.
     std::optional<int> shrink_correction;
+    /// --noise-fairness: gain G of the fairness multipliers 1 + G min(1, ρ/0.02)² where a share ρ
+    /// of the faces around a vertex point against their surfel (noise_fairness_gamma,
+    /// local_weights.hpp); unset = 12; 0 = off. Multiplies --gamma-map / --gamma-file.
+    std::optional<double> noise_fairness;
     std::string alpha_map, beta_map, gamma_map;     ///< scalar volumes on the input grid
     std::string alpha_file, beta_file, gamma_file;  ///< text files, one value per vertex (face for beta)
     RawVolumeLayout map_raw_layout;  ///< value type, byte order and header of .raw maps (dims: the input's)

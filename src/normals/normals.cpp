@@ -23,20 +23,38 @@ Eigen::Vector3d lift_into_half_space(const Eigen::Vector3d& u, const Eigen::Vect
     return std::sqrt(1 - margin * margin) * tangential / length + margin * n;
 }
 
-std::int64_t lift_into_surfel_half_spaces(const DigitalSurface& surface, PointMatrix& normals, double margin) {
+namespace {
+
+void check_field_size(const DigitalSurface& surface, const PointMatrix& normals, const char* what) {
     if (normals.rows() != surface.face_count() || normals.cols() != 3)
-        throw Error("field lift: " + std::to_string(normals.rows()) + " normals for " + std::to_string(surface.face_count()) +
-                    " faces");
+        throw Error(std::string(what) + ": " + std::to_string(normals.rows()) + " normals for " +
+                    std::to_string(surface.face_count()) + " faces");
+}
+
+}  // namespace
+
+bool lift_into_surfel_half_space(const DigitalSurface& surface, PointMatrix& normals, std::int64_t f, double margin) {
+    const Eigen::Vector3d n = surface.surfels[std::size_t(f)].trivial_normal();
+    const Eigen::Vector3d u = normals.row(f).transpose();
+    if (u.dot(n) >= margin) return false;
+    normals.row(f) = lift_into_half_space(u, n, margin).transpose();
+    return true;
+}
+
+std::int64_t lift_into_surfel_half_spaces(const DigitalSurface& surface, PointMatrix& normals, double margin) {
+    check_field_size(surface, normals, "field lift");
     if (!(margin >= 0 && margin < 1)) throw Error("field lift: the margin must be in [0, 1)");
     std::int64_t lifted = 0;
-    for (std::int64_t f = 0; f < surface.face_count(); ++f) {
-        const Eigen::Vector3d n = surface.surfels[std::size_t(f)].trivial_normal();
-        const Eigen::Vector3d u = normals.row(f).transpose();
-        if (u.dot(n) >= margin) continue;
-        normals.row(f) = lift_into_half_space(u, n, margin).transpose();
-        ++lifted;
-    }
+    for (std::int64_t f = 0; f < surface.face_count(); ++f) lifted += lift_into_surfel_half_space(surface, normals, f, margin);
     return lifted;
+}
+
+std::vector<std::int32_t> faces_against_their_surfels(const DigitalSurface& surface, const PointMatrix& normals) {
+    check_field_size(surface, normals, "faces against their surfels");
+    std::vector<std::int32_t> faces;
+    for (std::int64_t f = 0; f < surface.face_count(); ++f)
+        if (normals.row(f).dot(surface.surfels[std::size_t(f)].trivial_normal().transpose()) < 0) faces.push_back(std::int32_t(f));
+    return faces;
 }
 
 PointMatrix exact_normals(const ImplicitShape& shape, const DigitalSurface& surface) {

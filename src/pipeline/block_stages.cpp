@@ -32,13 +32,14 @@ void refuse_global_options(const PipelineOptions& o, const std::string& driver) 
     refuse(!e.alpha_file.empty(), "--alpha-file", local);
     refuse(!e.beta_file.empty(), "--beta-file", local);
     refuse(!e.gamma_file.empty(), "--gamma-file", local);
-    // The adaptive field, the thin-part weights and the shrink correction rest on distance maps
-    // and averages that span the whole object: block-wise runs have a fixed radius
-    // (normal_field_reach) and neither correction yet (block_wise_options).
+    // The adaptive field, the thin-part and noise weights and the shrink correction rest on
+    // distance maps and averages that span the whole object: block-wise runs have a fixed radius
+    // (normal_field_reach) and none of the corrections yet (block_wise_options).
     const std::string whole = "it is measured on the whole object (not block by block yet)";
     refuse(o.normals.max_radius.has_value(), "--ii-max-radius", whole);
     refuse(e.alpha_reach && *e.alpha_reach > 0, "--alpha-reach", whole);
     refuse(e.shrink_correction && *e.shrink_correction > 0, "--shrink-correction", whole);
+    refuse(e.noise_fairness && *e.noise_fairness > 0, "--noise-fairness", whole);
 }
 
 std::int64_t object_voxels_in(const BinaryVolume& volume, const VoxelBox& volume_box, const VoxelBox& box) {
@@ -139,6 +140,7 @@ BlockPlan plan_block_run(const VolumeSource& source, const PipelineOptions& opti
     plan.options.normals = plan.reach.options;
     plan.options.extensions.alpha_reach = 0.0;
     plan.options.extensions.shrink_correction = 0;
+    plan.options.extensions.noise_fairness = 0.0;
     if (source.raw_layout) plan.options.extensions.map_raw_layout = *source.raw_layout;
     const Eigen::Vector3d& spacing = plan.header.volume.grid.spacing;
     const Index3 surface = reach_in_voxels(plan.reach.surface_radius, spacing);
@@ -176,7 +178,7 @@ BlockStages run_block_stages(const VolumeSource& source, const BlockPlan& plan, 
         b.field = compute_normal_field(o.normals, loaded, b.patch.surface, clock);
         clock.start("assembly");
         b.weights = RegularizationWeights{o.alpha, o.beta, o.gamma, {}, {}};
-        apply_regularization_extensions(o.extensions, b.patch.surface, b.field.normals, Eigen::VectorXd(), b.weights);
+        apply_regularization_extensions(o.extensions, b.patch.surface, b.field, Eigen::VectorXd(), b.weights);
         const DigitalSurface& s = b.patch.surface;
         b.system = assembly == BlockAssembly::matrix_and_rhs
                        ? assemble_regularization_system(s.vertices, s.quads, vertex_links(s.quads, s.vertex_count()),

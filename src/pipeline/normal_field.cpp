@@ -211,6 +211,7 @@ void check_normal_field_options(const NormalFieldOptions& o, bool input_is_shape
 /// --normals exact, nor of a file's field, which are the user's).
 void lift_estimated_field(const NormalFieldOptions& o, const DigitalSurface& surface, NormalField& field) {
     if (!o.lift_margin || field_kind(o) == "exact" || (field_kind(o) != "at" && input_kind(o) == "file")) return;
+    field.faces_against_surfels = faces_against_their_surfels(surface, field.normals);
     field.lifted_faces = lift_into_surfel_half_spaces(surface, field.normals, *o.lift_margin);
     if (field.lifted_faces > 0)
         field.description += "; " + std::to_string(field.lifted_faces) + " faces lifted to u.n >= " + format("%g", *o.lift_margin);

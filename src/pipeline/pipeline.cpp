@@ -157,7 +157,7 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
 
     clock.start("regularize");
     result.weights = global_weights(o);
-    apply_regularization_extensions(o.extensions, result.surface, result.field.normals,
+    apply_regularization_extensions(o.extensions, result.surface, result.field,
                                     thin_part_reach(o.extensions, loaded.voxel_labels(), result.surface, result.field),
                                     result.weights);
     SolverOptions solver;
@@ -469,6 +469,8 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
                             {"ii_extrapolated", field.ii_extrapolated},
                             {"field_lift_margin", optional_json(o.normals.lift_margin)},
                             {"lifted_faces", field.lifted_faces},
+                            {"faces_against_surfels", std::int64_t(field.faces_against_surfels.size())},
+                            {"noise_fairness", noise_fairness(o.extensions)},
                             {"solver", solve.solver}, {"max_error_voxels", o.max_error_voxels},
                             {"triangulate", outputs.triangulate}};
     if (field.adaptive) {
@@ -484,6 +486,9 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
         report["thin_part_alpha"] = {{"reference_reach", alpha_reach(o.extensions, r.grid)},
                                      {"multiplier_max", r.weights.vertex_alpha.maxCoeff()},
                                      {"vertices_above_one", (r.weights.vertex_alpha.array() > 1.0).count()}};
+    if (r.weights.vertex_gamma.size() > 0 && noise_fairness(o.extensions) > 0 && !field.faces_against_surfels.empty())
+        report["noise_fairness"] = {{"multiplier_max", r.weights.vertex_gamma.maxCoeff()},
+                                    {"vertices_above_one", (r.weights.vertex_gamma.array() > 1.0).count()}};
     if (field.at) report["at"] = at_report(o.normals, field, surface);
     report["solve"] = {{"relative_residual", solve.relative_residual},
                        {"error_bound", solve.error_bound},

@@ -33,11 +33,15 @@ double alpha_reach(const RegularizationExtensions& options, const VoxelGrid& gri
 /// The report's energy object: the three terms of eq. (1) without their weights, and the total.
 nlohmann::json energy_json(const EnergyTerms& terms, const RegularizationWeights& weights);
 
+/// The strength of --noise-fairness when unset (docs/accuracy.md, "Noisy voxels").
+double noise_fairness(const RegularizationExtensions& options);
+
 /// Fills the metric (W0, W2) and the local multipliers of `weights` for this surface and normal
-/// field, reading the maps or files and, given the faces' reach (empty: none), the thin-part
-/// data weights; then validates the weights. Throws dsreg::Error.
+/// field, reading the maps or files, the noise fairness multipliers (from the field's faces
+/// against their surfels) and, given the faces' reach (empty: none), the thin-part data
+/// weights; then validates the weights. Throws dsreg::Error.
 void apply_regularization_extensions(const RegularizationExtensions& options, const DigitalSurface& surface,
-                                     const PointMatrix& normals, const Eigen::VectorXd& face_reach,
+                                     const NormalField& field, const Eigen::VectorXd& face_reach,
                                      RegularizationWeights& weights);
 
 /// regularize() with `solver` then correct_shrink() (--shrink-correction; the energy after is that

@@ -75,6 +75,36 @@ Eigen::VectorXd thin_part_alpha(const DigitalSurface& surface, const Eigen::Vect
     });
 }
 
+Eigen::VectorXd noise_fairness_gamma(const DigitalSurface& surface, const std::vector<std::int32_t>& faces_against_surfels,
+                                     double gain, double full_share, int rings) {
+    if (!(gain >= 0) || !std::isfinite(gain)) throw Error("noise fairness: the gain must be zero or positive");
+    if (!(full_share > 0 && full_share <= 1)) throw Error("noise fairness: the full share must be in (0, 1]");
+    if (rings < 0) throw Error("noise fairness: the number of rings must be zero or positive");
+    const std::int64_t faces = surface.face_count();
+    Eigen::VectorXd face_share = Eigen::VectorXd::Zero(faces);
+    for (const std::int32_t f : faces_against_surfels) {
+        if (f < 0 || f >= faces)
+            throw Error("noise fairness: face " + std::to_string(f) + " of " + std::to_string(faces));
+        face_share[f] = 1;
+    }
+    Eigen::VectorXd incident = Eigen::VectorXd::Zero(surface.vertex_count());
+    for (std::int64_t f = 0; f < faces; ++f)
+        for (int k = 0; k < 4; ++k) incident[surface.quads(f, k)] += 1;
+    Eigen::VectorXd vertex_share(surface.vertex_count());
+    for (int pass = 0;; ++pass) {
+        vertex_share.setZero();
+        for (std::int64_t f = 0; f < faces; ++f)
+            for (int k = 0; k < 4; ++k) vertex_share[surface.quads(f, k)] += face_share[f];
+        vertex_share = vertex_share.cwiseQuotient(incident.cwiseMax(1.0));
+        if (pass == rings) break;
+        face_share = face_means(surface.quads, vertex_share);
+    }
+    return vertex_share.unaryExpr([gain, full_share](double share) {
+        const double strength = std::min(1.0, share / full_share);
+        return 1 + gain * strength * strength;
+    });
+}
+
 Eigen::VectorXd face_means(const FaceMatrix& faces, const Eigen::VectorXd& vertex_values) {
     Eigen::VectorXd means(faces.rows());
     for (Eigen::Index f = 0; f < faces.rows(); ++f) {

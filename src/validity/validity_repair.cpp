@@ -245,10 +245,7 @@ private:
     std::vector<std::int32_t> correct_field(const std::vector<std::int32_t>& folded, ValidityRepairReport& report) {
         std::vector<std::int32_t> corrected;
         for (const std::int32_t f : folded) {
-            const Eigen::Vector3d n = surface_.surfels[std::size_t(f)].trivial_normal();
-            const Eigen::Vector3d u = field_.row(f).transpose();
-            if (u.dot(n) >= o_.field_margin) continue;
-            field_.row(f) = lift_into_half_space(u, n, o_.field_margin).transpose();
+            if (!lift_into_surfel_half_space(surface_, field_, f, o_.field_margin)) continue;
             corrected_[std::size_t(f)] = 1;
             corrected.push_back(f);
             ++report.field_corrections;
