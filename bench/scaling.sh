@@ -41,7 +41,7 @@ load=$(cut -d' ' -f1 /proc/loadavg)
 echo "# $(date -u '+%F %H:%M UTC'), commit $(git -C "$here" rev-parse --short HEAD), load $load, goursat h=$h alpha=$alpha"
 radius=$(awk -v h="$h" 'BEGIN { printf "%.17g", 3 * exp(log(h) / 3) }')
 shape=(--shape goursat --h "$h" --alpha "$alpha" --no-check)
-whole=(--radius "$radius" --alpha-reach 0 --shrink-correction 0)
+whole=(--radius "$radius" --alpha-reach 0 --shrink-correction 0 --noise-fairness 0)
 reference=${REFERENCE_DIR:-$work}/reference_fixed_h${h}_alpha$alpha.ply
 [[ -s $reference ]] || timed "$reference" "$build/dsreg" regularize "${shape[@]}" "${whole[@]}" --solver cholmod
 for suffix in ply json time; do ln -sf "${reference%.ply}.$suffix" "$work/ref.$suffix"; done

@@ -22,9 +22,9 @@ max_difference() {
 }
 below() { awk -v a="$1" -v b="$2" 'BEGIN {exit !(a < b)}'; }
 
-# Block-wise runs have a fixed radius and neither the thin-part weights nor the shrink correction
-# (plan_block_run): the serial runs they are compared with get the same options.
-blockwise="--radius 2.5 --alpha-reach 0 --shrink-correction 0"
+# Block-wise runs have a fixed radius and none of the thin-part weights, the noise fairness and
+# the shrink correction (plan_block_run): the serial runs they are compared with get the same options.
+blockwise="--radius 2.5 --alpha-reach 0 --shrink-correction 0 --noise-fairness 0"
 # dsreg-mpi writes the mesh dsreg regularize writes (same faces, vertices within 1e-6 voxel).
 "$DSREG_SERIAL" regularize --shape goursat --h 0.5 $blockwise --solver cholmod -o "$work/serial.obj" -q
 log=$("$DSREG" --shape goursat --h 0.5 --radius 2.5 --max-error 1e-7 -o "$work/mpi.obj" --report "$work/mpi.json" \
@@ -52,6 +52,7 @@ expect_error "streaming refused" "--block-size" --shape sphere9 --h 1 --block-si
 expect_error "dsreg-mpi refuses --labels" "--labels" --shape sphere9 --h 1 --labels 1 -o "$work/out.obj"
 expect_error "max-memory refused" "--max-memory" --shape sphere9 --h 1 --max-memory 4G -o "$work/out.obj"
 expect_error "thin-part weights refused" "--alpha-reach" --shape sphere9 --h 1 --alpha-reach 12 -o "$work/out.obj"
+expect_error "noise fairness refused" "--noise-fairness" --shape sphere9 --h 1 --noise-fairness 12 -o "$work/out.obj"
 expect_error "bad flag" "--no-such-flag" --shape sphere9 --no-such-flag -o "$work/out.obj"
 expect_error "missing output folder" "no/such" --shape sphere9 --h 1 -o "$work/no/such/out.obj"
 

@@ -33,7 +33,7 @@ double alpha_reach(const RegularizationExtensions& options, const VoxelGrid& gri
 /// The report's energy object: the three terms of eq. (1) without their weights, and the total.
 nlohmann::json energy_json(const EnergyTerms& terms, const RegularizationWeights& weights);
 
-/// The strength of --noise-fairness when unset (docs/accuracy.md, "Noisy voxels").
+/// The gain of --noise-fairness in use: the option's, or its default when unset (docs/accuracy.md, "Noisy voxels").
 double noise_fairness(const RegularizationExtensions& options);
 
 /// Fills the metric (W0, W2) and the local multipliers of `weights` for this surface and normal
