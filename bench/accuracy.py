@@ -231,7 +231,8 @@ def markdown(results, meta):
              "Each cell: dsreg / Slicer pipeline (flying edges + windowed sinc). Distance: mean vertex distance to "
              "the true surface in units of h; normal: mean face-normal error; object, boundary: voxel centres "
              "classified like the input among its object voxels, among the voxels next to its surface (both "
-             "sides); self-int.: self-intersecting triangle pairs (CGAL) / dsreg faces folded against u; target: the "
+             "sides); self-int. / folded: dsreg's self-intersecting triangle pairs (CGAL) / dsreg's faces folded "
+             "against u ; Slicer's self-intersecting triangle pairs; target: the "
              "best of Slicer and the DGtal figure (in brackets) where given.",
              "",
              "| case | surfels | distance (h) [DGtal] | normal (°) [DGtal] | object % | boundary % | self-int. / folded | dsreg / Slicer CPU s | meets target |",
