@@ -229,6 +229,49 @@ TEST(ValidityRepair, TheResultMinimizesTheRepairedEnergyOverTheRegionAndNothingE
     }
 }
 
+TEST(ValidityRepair, SmoothingFirstEndsValidAtTheMinimizerOfItsEnergy) {
+    // Every vertex marked: the cap's folds first raise the fairness of their vertices (twice),
+    // then, where still folded, the data term; the result minimizes E' with both factors.
+    const TiltedCap& c = tilted_cap();
+    ValidityRepairOptions options;
+    options.smooth_first.assign(std::size_t(c.surface.vertex_count()), 1);
+    const ValidityRepairResult r = repair_validity(c.surface, c.field, RegularizationWeights{}, c.solved.positions, options);
+    EXPECT_TRUE(r.report.after.valid());
+    EXPECT_TRUE(check_mesh_validity(r.positions, c.surface.quads, r.normals).valid());
+    ASSERT_TRUE(r.report.exact);
+    EXPECT_GT(r.report.smoothed_vertices, 0);
+    EXPECT_LE(r.fairness_factors.maxCoeff(), options.fairness_start * options.fairness_step);
+    EXPECT_GE(r.fairness_factors.minCoeff(), 1.0);
+    RegularizationWeights repaired;
+    repaired.vertex_alpha = r.alpha_factors;
+    repaired.vertex_gamma = r.fairness_factors;
+    const VertexLinks links = vertex_links(c.surface.quads, c.surface.vertex_count());
+    const RegularizationSystem system =
+        assemble_regularization_system(c.surface.vertices, c.surface.quads, links, r.normals, repaired);
+    const Eigen::VectorXd gradient = system.matrix * flatten_points(r.positions) - system.rhs;
+    std::vector<char> free_in_region(std::size_t(c.surface.vertex_count()), 0);
+    for (const std::int32_t v : r.region) free_in_region[std::size_t(v)] = 1;
+    for (const std::int32_t v : r.held) free_in_region[std::size_t(v)] = 0;
+    double worst = 0;
+    for (std::int64_t v = 0; v < c.surface.vertex_count(); ++v)
+        if (free_in_region[std::size_t(v)]) worst = std::max(worst, gradient.segment<3>(3 * v).norm());
+    EXPECT_LT(worst, 1e-9 * system.rhs.norm());
+    // Smoothing moves the folded cap less far back towards the voxels than the data term does.
+    const ValidityRepairResult& data_first = tilted_cap_repair();
+    EXPECT_EQ(data_first.report.smoothed_vertices, 0);
+    EXPECT_LT(r.report.energy_after.fairness, data_first.report.energy_after.fairness);
+
+    // Without fairness (γ = 0) there is nothing to raise: the data term at once, as without marks.
+    RegularizationWeights no_fairness;
+    no_fairness.gamma = 0;
+    const RegularizationResult solved = regularize(c.surface, c.field, no_fairness, cholmod());
+    const ValidityRepairResult plain = repair_validity(c.surface, c.field, no_fairness, solved.positions);
+    const ValidityRepairResult marked = repair_validity(c.surface, c.field, no_fairness, solved.positions, options);
+    EXPECT_TRUE(marked.report.after.valid());
+    EXPECT_EQ(marked.report.smoothed_vertices, 0);
+    EXPECT_EQ(marked.positions, plain.positions);
+}
+
 TEST(ValidityRepair, TheEnergyRisesOnlyAsMuchAsTheRepairNeeds) {
     const TiltedCap& c = tilted_cap();
     const ValidityRepairResult& r = tilted_cap_repair();

@@ -67,6 +67,16 @@ struct ValidityRepairOptions {
     double alpha_start = 10;   ///< first factor of α_i on a vertex of an invalid face
     double alpha_step = 10;    ///< then × this each round it is still invalid (> 1)
     double alpha_cap = 1000;   ///< a vertex whose factor reached this and is still invalid is held
+    /// Fairness first, at the vertices marked in smooth_first (empty: none): the first
+    /// fairness_steps rounds that find such a vertex invalid multiply the weight of its fairness
+    /// term (eq. 11–14; fairness_start, then × fairness_step) instead of its data weight, which
+    /// untangles a fold without pulling the vertex back towards its voxels; then the data term as
+    /// below, so the repair still ends valid. The pipeline marks the noisy vertices (those of the
+    /// noise fairness, docs/accuracy.md "Noisy voxels"), where the voxels are the wrong target.
+    std::vector<char> smooth_first;
+    int fairness_steps = 2;
+    double fairness_start = 10;
+    double fairness_step = 10;
     double alpha_grade = 3;    ///< the rings around a strengthened vertex get its factor / this per ring
     int grade_rings = 2;       ///< rings graded so
     int region_rings = 2;      ///< the region U: the strengthened vertices and this many rings (≥ grade_rings)
@@ -85,6 +95,7 @@ struct ValidityRepairReport {
     int rounds = 0;       ///< rounds that solved something (0: p* was valid)
     std::int64_t region_vertices = 0;        ///< |U|
     std::int64_t strengthened_vertices = 0;  ///< vertices whose α_i was multiplied
+    std::int64_t smoothed_vertices = 0;      ///< vertices whose fairness weight was multiplied (fairness_steps)
     std::int64_t held_vertices = 0;          ///< of which held at their target
     std::int64_t field_corrections = 0;      ///< faces whose u was replaced
     std::int64_t parts_solved = 0;           ///< local solves, over all rounds
@@ -104,6 +115,7 @@ struct ValidityRepairResult {
     PointMatrix positions;  ///< x
     PointMatrix normals;    ///< the field with its corrections (the input field where none)
     Eigen::VectorXd alpha_factors;     ///< m_i of E' (1 outside the strengthened vertices)
+    Eigen::VectorXd fairness_factors;  ///< n_i of E' (1 outside the smoothed vertices; smooth_first)
     PointMatrix targets;               ///< t (repair_targets), empty if nothing was repaired
     std::vector<std::int32_t> region;  ///< U, sorted
     std::vector<std::int32_t> held;    ///< vertices held at their target, sorted

@@ -90,6 +90,7 @@ nlohmann::json validity_json(const ValidityRepairReport& r, const Regularization
             {"rounds", r.rounds},
             {"region_vertices", r.region_vertices},
             {"strengthened_vertices", r.strengthened_vertices},
+            {"smoothed_vertices", r.smoothed_vertices},
             {"held_vertices", r.held_vertices},
             {"field_corrections", r.field_corrections},
             {"parts_solved", r.parts_solved},
@@ -107,6 +108,10 @@ void check_and_repair(const PipelineOptions& o, PipelineResult& result, StageClo
     clock.start("validity");
     ValidityRepairOptions options;
     if (o.validity == ValidityMode::Check) options.max_rounds = 0;
+    // Where the voxels are noisy, a fold is first smoothed (docs/accuracy.md, "Noisy voxels").
+    const Eigen::VectorXd noisy = noise_multipliers(o.extensions, result.surface, result.field);
+    options.smooth_first.assign(std::size_t(noisy.size()), 0);
+    for (Eigen::Index v = 0; v < noisy.size(); ++v) options.smooth_first[std::size_t(v)] = noisy[v] > 1;
     if (o.extensions.clamp) {  // stay in the clamp boxes, and keep the split copies' targets inside them
         options.clamp_half_width = o.extensions.clamp_half_width;
         options.split_offset = std::min(options.split_offset, 0.5 * o.extensions.clamp_half_width);

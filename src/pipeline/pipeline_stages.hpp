@@ -36,6 +36,10 @@ nlohmann::json energy_json(const EnergyTerms& terms, const RegularizationWeights
 /// The gain of --noise-fairness in use: the option's, or its default when unset (docs/accuracy.md, "Noisy voxels").
 double noise_fairness(const RegularizationExtensions& options);
 
+/// The fairness multipliers of the noise fairness for this surface and field (noise_fairness_gamma,
+/// local_weights.hpp); empty when it is off or no face points against its surfel.
+Eigen::VectorXd noise_multipliers(const RegularizationExtensions& options, const DigitalSurface& surface, const NormalField& field);
+
 /// Fills the metric (W0, W2) and the local multipliers of `weights` for this surface and normal
 /// field, reading the maps or files, the noise fairness multipliers (from the field's faces
 /// against their surfels) and, given the faces' reach (empty: none), the thin-part data

@@ -118,6 +118,11 @@ double noise_fairness(const RegularizationExtensions& o) {
     return o.noise_fairness ? *o.noise_fairness : kDefaultNoiseFairness;
 }
 
+Eigen::VectorXd noise_multipliers(const RegularizationExtensions& o, const DigitalSurface& surface, const NormalField& field) {
+    if (!(noise_fairness(o) > 0) || field.faces_against_surfels.empty()) return Eigen::VectorXd();
+    return noise_fairness_gamma(surface, field.faces_against_surfels, noise_fairness(o), kNoiseFullShare, kNoiseRings);
+}
+
 double alpha_reach(const RegularizationExtensions& o, const VoxelGrid& grid) {
     return o.alpha_reach ? *o.alpha_reach : 12.0 * grid.spacing.maxCoeff();
 }
@@ -149,11 +154,9 @@ void apply_regularization_extensions(const RegularizationExtensions& o, const Di
     apply_metric(parse_metric_kind(o.metric), surface, field.normals, weights);
     for (const WeightSource& w : weight_sources(o))
         if (!w.map.empty() || !w.file.empty()) multiplier_slot(weights, w.name) = read_multipliers(w, o, surface);
-    if (noise_fairness(o) > 0 && !field.faces_against_surfels.empty()) {
-        const Eigen::VectorXd noisy =
-            noise_fairness_gamma(surface, field.faces_against_surfels, noise_fairness(o), kNoiseFullShare, kNoiseRings);
+    const Eigen::VectorXd noisy = noise_multipliers(o, surface, field);
+    if (noisy.size() > 0)
         weights.vertex_gamma = weights.vertex_gamma.size() > 0 ? Eigen::VectorXd(weights.vertex_gamma.cwiseProduct(noisy)) : noisy;
-    }
     if (face_reach.size() > 0) {
         const Eigen::VectorXd thin = thin_part_alpha(surface, face_reach, alpha_reach(o, surface.grid));
         weights.vertex_alpha = weights.vertex_alpha.size() > 0 ? Eigen::VectorXd(weights.vertex_alpha.cwiseProduct(thin)) : thin;

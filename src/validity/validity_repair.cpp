@@ -125,7 +125,8 @@ std::vector<std::int32_t> rings_around(const VertexLinks& links, const std::vect
 /// The state of a repair: the α factors m_i, the held vertices, the corrected field, the region
 /// and the current positions x. E' differs from E (R x = b, R read block row by block row for the
 /// vertices solved: the region is usually a small part of the mesh) by
-///   Σ_i (m_i − 1) α α_i w0_i |x_i − t_i|²  +  Σ_{corrected f} β β_f w2_f Σ_e [((x_a − x_b)·u'_f)² − ((x_a − x_b)·u_f)²],
+///   Σ_i (m_i − 1) α α_i w0_i |x_i − t_i|²  +  Σ_{corrected f} β β_f w2_f Σ_e [((x_a − x_b)·u'_f)² − ((x_a − x_b)·u_f)²]
+///   + Σ_i (n_i − 1) γ γ_i w0_i |x_i − mean_{j ∈ link(i)} x_j|²   (n_i: fairness first, smooth_first),
 /// which the local solves add to the rows they solve for.
 class Repair {
 public:
@@ -135,6 +136,7 @@ public:
           neighbours_(edge_neighbours(surface.quads, surface.vertex_count())),
           input_field_(normals), field_(normals), targets_(repair_targets(surface, options.split_offset)),
           x_(flatten_points(positions)), factor_(std::size_t(surface.vertex_count()), 1.0),
+          fair_factor_(std::size_t(surface.vertex_count()), 1.0), fair_steps_(std::size_t(surface.vertex_count()), 0),
           held_(std::size_t(surface.vertex_count()), 0), in_region_(std::size_t(surface.vertex_count()), 0),
           corrected_(std::size_t(surface.face_count()), 0), changed_(std::size_t(surface.vertex_count()), 1),
           local_(std::size_t(surface.vertex_count()), -1), mark_(std::size_t(surface.vertex_count()), 0),
@@ -229,11 +231,14 @@ public:
 
     void finish(ValidityRepairResult& result) const {
         result.alpha_factors.resize(surface_.vertex_count());
+        result.fairness_factors.resize(surface_.vertex_count());
         for (std::int64_t i = 0; i < surface_.vertex_count(); ++i) {
             result.alpha_factors[i] = factor_[std::size_t(i)];
+            result.fairness_factors[i] = fair_factor_[std::size_t(i)];
             if (in_region_[std::size_t(i)]) result.region.push_back(std::int32_t(i));
             if (held_[std::size_t(i)]) result.held.push_back(std::int32_t(i));
             result.report.strengthened_vertices += factor_[std::size_t(i)] > 1 ? 1 : 0;
+            result.report.smoothed_vertices += fair_factor_[std::size_t(i)] > 1 ? 1 : 0;
         }
         result.report.region_vertices = std::int64_t(result.region.size());
         result.report.held_vertices = std::int64_t(result.held.size());
@@ -291,8 +296,17 @@ private:
     std::vector<std::int32_t> strengthen(const std::vector<std::int32_t>& invalid) {
         std::vector<std::int32_t> changed;
         for (const std::int32_t v : invalid) {
-            double& m = factor_[std::size_t(v)];
             changed.push_back(v);
+            if (smooth_first(v)) {
+                double& n = fair_factor_[std::size_t(v)];
+                if (n == 1) fair_vertices_.push_back(v);
+                n = std::max(n * o_.fairness_step, o_.fairness_start);
+                ++fair_steps_[std::size_t(v)];
+                for (std::int64_t k = links_.offsets[std::size_t(v)]; k < links_.offsets[std::size_t(v) + 1]; ++k)
+                    changed_[std::size_t(links_.neighbors[std::size_t(k)])] = 1;  // rows of its term
+                continue;
+            }
+            double& m = factor_[std::size_t(v)];
             if (m < o_.alpha_cap) {
                 m = std::max(m * o_.alpha_step, o_.alpha_start);
             } else if (!held_[std::size_t(v)]) {
@@ -302,7 +316,9 @@ private:
                 changed_[std::size_t(v)] = 1;
             }
         }
-        std::vector<std::int32_t> frontier = invalid;
+        std::vector<std::int32_t> frontier;
+        for (const std::int32_t v : invalid)
+            if (factor_[std::size_t(v)] > 1) frontier.push_back(v);
         for (int ring = 0; ring < o_.grade_rings; ++ring) {
             std::vector<std::int32_t> next;
             for (const std::int32_t v : frontier)
@@ -319,6 +335,13 @@ private:
         std::sort(changed.begin(), changed.end());
         changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
         return changed;
+    }
+
+    /// Whether a fold at v raises its fairness this round rather than its data term (not where
+    /// the fairness weight is 0: nothing to raise).
+    bool smooth_first(std::int32_t v) const {
+        return fair_steps_[std::size_t(v)] < o_.fairness_steps && std::size_t(v) < o_.smooth_first.size() &&
+               o_.smooth_first[std::size_t(v)] && weights_.gamma * detail::fairness_weight(weights_, v) > 0;
     }
 
     bool free_in_region(std::int64_t v) const { return in_region_[std::size_t(v)] && !held_[std::size_t(v)]; }
@@ -413,6 +436,36 @@ private:
         }
     }
 
+    /// The stronger fairness terms (n_i − 1) γ γ_i w0_i |x_i − mean_{j ∈ link(i)} x_j|² (eq. 11–14)
+    /// that reach the rows [first, last) of the part: their blocks e a_r a_c I3, with a_i = 1 and
+    /// a_j = −1/|link(i)| per occurrence of j in the link. R's own fairness term i couples the same
+    /// vertices, so they are all in the part or held.
+    template <class Entry>
+    void add_fairness_terms(const std::vector<std::int32_t>& part, Entry& entry, Eigen::VectorXd& b, std::size_t first,
+                            std::size_t last) const {
+        const auto in_rows = [&](std::int32_t v) {
+            const std::int32_t l = local_[std::size_t(v)];
+            return l >= 0 && std::size_t(l) >= first && std::size_t(l) < last;
+        };
+        std::vector<std::pair<std::int32_t, double>> term;
+        for (const std::int32_t i : fair_vertices_) {
+            const std::int64_t begin = links_.offsets[std::size_t(i)], end = links_.offsets[std::size_t(i) + 1];
+            if (end == begin) continue;
+            bool reaches = in_rows(i);
+            for (std::int64_t k = begin; k < end && !reaches; ++k) reaches = in_rows(links_.neighbors[std::size_t(k)]);
+            if (!reaches) continue;
+            const double e = (fair_factor_[std::size_t(i)] - 1) * weights_.gamma * detail::fairness_weight(weights_, i);
+            // With e = 0 (γ γ_i w0_i = 0) R does not couple the term's vertices, so they may lie in
+            // other parts, whose local indices local_ holds too when parts are solved side by side.
+            if (!(e > 0)) continue;
+            term.assign(1, {i, 1.0});
+            for (std::int64_t k = begin; k < end; ++k) term.emplace_back(links_.neighbors[std::size_t(k)], -1.0 / double(end - begin));
+            for (const auto& [r, ar] : term)
+                for (const auto& [c, ac] : term)
+                    add_block(part, r, c, e * ar * ac * Eigen::Matrix3d::Identity(), entry, b, first, last);
+        }
+    }
+
     /// The rows of E' for the part (local_ set): R_PP x_P = b_P − R_P,rest x_rest, plus the
     /// repair's terms. A block of R without an alignment part is c·I3 and gives its diagonal only,
     /// as in the assembled matrix. Calls entry(row, column, value) for each entry of R_PP + the
@@ -451,6 +504,7 @@ private:
                 b.segment<3>(r) += extra * targets_.row(v).transpose();
             }
         }
+        add_fairness_terms(part, entry, b, first, last);
         // Corrected faces: their alignment blocks with u' instead of u (eq. 5–10).
         std::vector<std::int32_t> faces;
         for (std::size_t k = first; k < last; ++k)
@@ -602,6 +656,9 @@ private:
     Eigen::VectorXd x_;
     std::vector<std::vector<std::int32_t>> faces_of_vertex_;
     std::vector<double> factor_;  ///< m_i
+    std::vector<double> fair_factor_;         ///< n_i, the fairness factors (fairness_steps)
+    std::vector<int> fair_steps_;             ///< times n_i was raised
+    std::vector<std::int32_t> fair_vertices_;  ///< the i with n_i > 1, in the order they were raised
     std::vector<char> held_;
     std::vector<char> in_region_;
     std::vector<char> corrected_;      ///< faces whose u was replaced
@@ -664,6 +721,7 @@ ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointM
     result.positions = positions;
     result.normals = normals;
     result.alpha_factors = Eigen::VectorXd::Ones(surface.vertex_count());
+    result.fairness_factors = Eigen::VectorXd::Ones(surface.vertex_count());
     const VertexLinks links = fairness_links(surface);
     report.energy_before = regularization_energy(positions, surface.vertices, surface.quads, links, normals, weights);
     report.energy_after = report.energy_before;
