@@ -187,7 +187,16 @@ void check_box_read(const char* target, const std::string& path, const RawVolume
         }
         violated(target, "a box of a file ITK reads whole was read");
     }
-    const BinaryVolume part = read_volume_box(path, box, ValueRange{}, layout);
+    BinaryVolume part;
+    try {
+        part = read_volume_box(path, box, ValueRange{}, layout);
+    } catch (const Error& error) {
+        // ITK also reads some files of the other formats whole (a VTK image in ASCII: found by
+        // fuzzing), and a box of them is refused the same way.
+        const std::string message = error.what();
+        FUZZ_CHECK(target, message.rfind(path + ": block-wise runs", 0) == 0, "unexpected box read refusal: " + message);
+        return;
+    }
     FUZZ_CHECK(target, equals_box_of(part, volume, box),
                "read_volume_box differs from the crop of read_volume");
     FUZZ_CHECK(target, part.grid.origin == g.voxel_center(box.lo[0], box.lo[1], box.lo[2]), "the box is not placed at its corner");
