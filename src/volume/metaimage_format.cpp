@@ -42,11 +42,8 @@ using Fields = std::map<std::string, std::string>;
 constexpr std::size_t kMaxKeyBytes = 200;        ///< the text before '=' (ITK's field names hold 254)
 constexpr std::size_t kMaxTextValueBytes = 200;  ///< a value that is not a list of numbers (ITK's text fields hold 254)
 
-/// Keys whose values MetaIO reads as lists of numbers, one per dimension (or NDims² for a
-/// matrix): the only values allowed to be long. Every other value is copied by MetaIO into a
-/// 255-byte field (Comment, Name…) or is a single word.
-/// The keys MetaIO reads as lists of numbers (their values may be long), with how many numbers
-/// each must give: one per dimension, or NDims² for a matrix. DimSize is checked on its own.
+/// The geometry keys MetaIO reads as lists of numbers, with how many numbers each must give: one
+/// per dimension, or NDims² for a matrix. DimSize, also a list, is checked on its own.
 struct NumberListKey {
     const char* name;
     bool matrix;
@@ -55,6 +52,9 @@ constexpr NumberListKey kGeometryKeys[] = {{"Offset", false},         {"Position
                                            {"ElementSpacing", false}, {"ElementSize", false},      {"TransformMatrix", true},
                                            {"Rotation", true},        {"Orientation", true},       {"CenterOfRotation", false}};
 
+/// Keys whose values MetaIO reads as lists of numbers (DimSize and the geometry keys): the only
+/// values allowed to be long. Every other value is copied by MetaIO into a 255-byte field
+/// (Comment, Name…) or is a single word.
 bool is_number_list_key(const std::string& lower_key) {
     if (lower_key == "dimsize") return true;
     for (const NumberListKey& key : kGeometryKeys)
