@@ -164,32 +164,73 @@ void multiply_symmetric_upper(const BlockMatrixT<Scalar>& a, const Eigen::Vector
     }
 }
 
-template <class Scalar>
-BlockMatrixT<Scalar> galerkin_product(const BlockMatrixT<Scalar>& a, const BlockMatrixT<Scalar>& p, const TransposedPattern& t) {
+namespace {
+
+/// Pᵀ A P row by row of Pᵀ, for any storage of A: `visit_row(i, add)` calls add(k, A(i, k)) for
+/// every block of row i. With `held` (one flag per coordinate), Pᵀ (M A M + ε H D H) P instead:
+/// M zeroes the held coordinates, H the free ones, D = diag(A), ε = `held_weight`.
+template <class Scalar, class VisitRow>
+BlockMatrixT<Scalar> galerkin_by_rows(const BlockMatrixT<Scalar>& p, const TransposedPattern& t, VisitRow visit_row,
+                                      const std::vector<char>* held, double held_weight = 0) {
+    const auto mask_columns = [&](std::int64_t i, Eigen::Matrix3d& m) {
+        for (int d = 0; d < 3; ++d)
+            if ((*held)[std::size_t(3 * i + d)]) m.col(d).setZero();
+    };
     return build_by_pattern<Scalar>(
         p.cols, p.cols,
         [&](std::int64_t c, auto&& mark) {
-            for (std::int64_t q = t.start[std::size_t(c)]; q < t.start[std::size_t(c + 1)]; ++q) {
-                const std::int64_t i = t.row[std::size_t(q)];
-                for (std::int64_t r = a.start[std::size_t(i)]; r < a.start[std::size_t(i + 1)]; ++r) {
-                    const std::int64_t k = a.column[std::size_t(r)];
+            for (std::int64_t q = t.start[std::size_t(c)]; q < t.start[std::size_t(c + 1)]; ++q)
+                visit_row(t.row[std::size_t(q)], [&](std::int64_t k, const auto&) {
                     for (std::int64_t s = p.start[std::size_t(k)]; s < p.start[std::size_t(k + 1)]; ++s) mark(p.column[std::size_t(s)]);
-                }
-            }
+                });
         },
         [&](std::int64_t c, auto&& block) {
             for (std::int64_t q = t.start[std::size_t(c)]; q < t.start[std::size_t(c + 1)]; ++q) {
                 const std::int64_t i = t.row[std::size_t(q)];
-                const Eigen::Matrix3d left = p.block_at(t.source[std::size_t(q)]).transpose();  // P(i, c)ᵀ
-                for (std::int64_t r = a.start[std::size_t(i)]; r < a.start[std::size_t(i + 1)]; ++r) {
-                    const Eigen::Matrix3d middle = left * a.block_at(r);  // P(i, c)ᵀ A(i, k)
-                    const std::int64_t k = a.column[std::size_t(r)];
+                const Eigen::Matrix3d p_ic = p.block_at(t.source[std::size_t(q)]);
+                Eigen::Matrix3d left = p_ic.transpose();  // P(i, c)ᵀ M(i)
+                if (held) mask_columns(i, left);
+                visit_row(i, [&](std::int64_t k, const Eigen::Matrix3d& a_ik) {
+                    Eigen::Matrix3d middle = left * a_ik;  // P(i, c)ᵀ M(i) A(i, k) M(k) + ε P(i, c)ᵀ H(i) D(i) H(i)
+                    if (held) {
+                        mask_columns(k, middle);
+                        if (k == i)
+                            for (int d = 0; d < 3; ++d)
+                                if ((*held)[std::size_t(3 * i + d)]) middle.col(d) += held_weight * a_ik(d, d) * p_ic.row(d).transpose();
+                    }
                     for (std::int64_t s = p.start[std::size_t(k)]; s < p.start[std::size_t(k + 1)]; ++s)
                         block(p.column[std::size_t(s)]).noalias() += middle * p.block_at(s);
-                }
+                });
             }
         },
         [](std::int64_t, const std::int32_t*, Eigen::Matrix3d*, std::size_t) {});
+}
+
+}  // namespace
+
+template <class Scalar>
+BlockMatrixT<Scalar> galerkin_product(const BlockMatrixT<Scalar>& a, const BlockMatrixT<Scalar>& p, const TransposedPattern& t) {
+    return galerkin_by_rows(
+        p, t,
+        [&](std::int64_t i, auto&& add) {
+            for (std::int64_t r = a.start[std::size_t(i)]; r < a.start[std::size_t(i + 1)]; ++r) add(a.column[std::size_t(r)], a.block_at(r));
+        },
+        nullptr);
+}
+
+template <class Scalar>
+BlockMatrixT<Scalar> held_galerkin_product(const BlockMatrixT<Scalar>& upper, const TransposedPattern& lower,
+                                           const BlockMatrixT<Scalar>& p, const TransposedPattern& t, const std::vector<char>& held,
+                                           double held_weight) {
+    return galerkin_by_rows(
+        p, t,
+        [&](std::int64_t i, auto&& add) {
+            for (std::int64_t r = upper.start[std::size_t(i)]; r < upper.start[std::size_t(i + 1)]; ++r)
+                add(upper.column[std::size_t(r)], upper.block_at(r));
+            for (std::int64_t r = lower.start[std::size_t(i)]; r < lower.start[std::size_t(i + 1)]; ++r)
+                if (lower.row[std::size_t(r)] != i) add(lower.row[std::size_t(r)], Eigen::Matrix3d(upper.block_at(lower.source[std::size_t(r)]).transpose()));
+        },
+        &held, held_weight);
 }
 
 namespace {
@@ -327,7 +368,10 @@ void block_row_norms(const BlockMatrixT<Scalar>& a, std::int64_t i, std::vector<
     template void multiply_symmetric_upper(const BlockMatrixT<Scalar>&, const Eigen::VectorXd&, Eigen::VectorXd&,       \
                                            std::vector<Eigen::VectorXd>&, bool);                                        \
     template BlockMatrixT<Scalar> galerkin_product(const BlockMatrixT<Scalar>&, const BlockMatrixT<Scalar>&,            \
-                                                   const TransposedPattern&);
+                                                   const TransposedPattern&);                                           \
+    template BlockMatrixT<Scalar> held_galerkin_product(const BlockMatrixT<Scalar>&, const TransposedPattern&,          \
+                                                        const BlockMatrixT<Scalar>&, const TransposedPattern&,          \
+                                                        const std::vector<char>&, double);
 DSREG_BLOCK_SPARSE_INSTANTIATE(double)
 DSREG_BLOCK_SPARSE_INSTANTIATE(float)
 #undef DSREG_BLOCK_SPARSE_INSTANTIATE

@@ -216,6 +216,19 @@ TransposedPattern transposed_pattern(const BlockMatrixT<Scalar>& p);
 template <class Scalar>
 BlockMatrixT<Scalar> galerkin_product(const BlockMatrixT<Scalar>& a, const BlockMatrixT<Scalar>& p, const TransposedPattern& t);
 
+/// The Galerkin product of the free coordinates, Pᵀ (M A M + ε H D H) P, for A stored as its
+/// upper triangle (keep_upper_triangle; `lower` = transposed_pattern(A) gives the mirrored
+/// blocks): M is the diagonal 0/1 mask of the free coordinates (`held`: one flag per scalar
+/// coordinate of A), H = I − M, D = diag(A), ε = `held_weight`. (M P)ᵀ A (M P) alone is the coarse
+/// operator of A with the held coordinates decoupled, but only semidefinite where the free
+/// coordinates do not tell two coarse basis functions apart (or reach none); the small term of
+/// the held coordinates makes it definite and changes nothing along the coarse corrections'
+/// directions that the free coordinates see fully.
+template <class Scalar>
+BlockMatrixT<Scalar> held_galerkin_product(const BlockMatrixT<Scalar>& upper, const TransposedPattern& lower,
+                                           const BlockMatrixT<Scalar>& p, const TransposedPattern& t, const std::vector<char>& held,
+                                           double held_weight);
+
 /// A copy with the blocks rounded to another precision.
 template <class To, class From>
 BlockMatrixT<To> convert(const BlockMatrixT<From>& a) {

@@ -485,7 +485,6 @@ IterativeHeldSolver::IterativeHeldSolver(const SpdSystem& system, Multigrid& mul
     : system_(system), multigrid_(multigrid), max_iterations_(max_iterations), diagonal_(system.unknowns()) {
     const std::vector<Eigen::Matrix3d>& blocks = system.diagonal_blocks();
     for (std::size_t i = 0; i < blocks.size(); ++i) diagonal_.segment<3>(3 * Eigen::Index(i)) = blocks[i].diagonal();
-    held_.assign(std::size_t(diagonal_.size()), false);
 }
 
 BoxQpReport solve_box_qp_with(HeldSolver& solver, const Eigen::VectorXd& b, const Eigen::VectorXd& lower,
@@ -497,21 +496,16 @@ BoxQpReport solve_box_qp_with(HeldSolver& solver, const Eigen::VectorXd& b, cons
 }
 
 bool IterativeHeldSolver::solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& y, double tolerance) {
-    const auto free_part = [&](const Eigen::VectorXd& v) {
-        Eigen::VectorXd out = v;
-        for (Eigen::Index i = 0; i < out.size(); ++i)
-            if (held_[std::size_t(i)]) out[i] = 0;
-        return out;
-    };
+    Eigen::VectorXd free_part;
     const LinearOperator held_product = [&](const Eigen::VectorXd& x, Eigen::VectorXd& out) {
-        system_.multiply(free_part(x), out);
-        for (Eigen::Index i = 0; i < out.size(); ++i)
-            if (held_[std::size_t(i)]) out[i] = diagonal_[i] * x[i];
+        free_part = x;
+        for (const Eigen::Index i : held_indices_) free_part[i] = 0;
+        system_.multiply(free_part, out);
+        for (const Eigen::Index i : held_indices_) out[i] = diagonal_[i] * x[i];
     };
     const Preconditioner restricted_vcycle = [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) {
         multigrid_.apply(r, z);  // decouples free and held coordinates
-        for (Eigen::Index i = 0; i < z.size(); ++i)
-            if (held_[std::size_t(i)]) z[i] = r[i] / diagonal_[i];
+        for (const Eigen::Index i : held_indices_) z[i] = r[i] / diagonal_[i];
     };
     CgStop stop;
     stop.absolute_residual = tolerance;

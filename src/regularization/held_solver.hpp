@@ -50,7 +50,9 @@ public:
     void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const override { system_.multiply(x, y); }
     const Eigen::VectorXd& diagonal() const override { return diagonal_; }
     void hold(const std::vector<bool>& held) override {
-        held_ = held;
+        held_indices_.clear();
+        for (std::size_t q = 0; q < held.size(); ++q)
+            if (held[q]) held_indices_.push_back(Eigen::Index(q));
         multigrid_.hold(held);
     }
     bool solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& y, double tolerance) override;
@@ -62,7 +64,7 @@ private:
     Multigrid& multigrid_;
     int max_iterations_;
     Eigen::VectorXd diagonal_;
-    std::vector<bool> held_;
+    std::vector<Eigen::Index> held_indices_;  ///< in increasing order
     int iterations_ = 0;
 };
 

@@ -68,10 +68,11 @@ public:
     virtual double operator_complexity() const = 0;
     /// Makes apply() a preconditioner of A_held (A with the rows and columns of the held
     /// coordinates replaced by their diagonal entries; all false: A again): the finest level's
-    /// operator and block diagonal are masked and the coarse correction acts on the free
-    /// coordinates only, the coarser levels stay those of A. The V-cycle stays symmetric
-    /// positive definite (any SPD coarse operators give an SPD V-cycle) and never couples free
-    /// and held coordinates.
+    /// operator and block diagonal are masked, the coarse correction acts on the free
+    /// coordinates only, and the coarse levels' operators are rebuilt as Galerkin products of
+    /// the free coordinates on the same aggregates (about one set-up's Galerkin products per
+    /// call). The V-cycle stays symmetric positive definite (any SPD coarse operators give an
+    /// SPD V-cycle) and never couples free and held coordinates.
     virtual void hold(const std::vector<bool>& held) = 0;
 };
 
@@ -97,6 +98,7 @@ public:
 private:
     struct Level;
     struct Coarsest;
+    struct HeldCoarse;
     void build(Matrix fine);
     std::vector<std::int32_t> aggregate_level(const Matrix& a, const std::vector<Eigen::Matrix3d>& diagonal,
                                               const StrengthGraph& strong, std::int64_t& count) const;
@@ -106,15 +108,22 @@ private:
     /// y = A_level x, or y −= A_level x if `subtract` (A_held on the finest level while coordinates are held).
     void multiply_level(std::size_t level, const Eigen::VectorXd& x, Eigen::VectorXd& y, bool subtract = false) const;
     void mask_held(Eigen::VectorXd& v) const;
+    void hold_coarse_levels();
 
     AmgSettings settings_;
     double fine_nonzeros_ = 0;
     std::vector<std::unique_ptr<Level>> levels_;
     std::unique_ptr<Coarsest> coarsest_;
     std::vector<char> held_;  ///< per coordinate of the finest level; empty: nothing held
+    std::vector<std::int64_t> held_indices_;  ///< the held coordinates, in increasing order
     Eigen::VectorXd held_diagonal_;
     mutable Eigen::VectorXd held_product_;  ///< A_held x on the finest level, while coordinates are held
     std::vector<typename Matrix::Block> held_inverse_diagonal_;
+    /// The coarse levels while coordinates are held: the Galerkin products of the free
+    /// coordinates, which replace the operators of A's coarse levels (hold_coarse_levels).
+    std::unique_ptr<HeldCoarse> held_coarse_;
+    TransposedPattern fine_lower_;           ///< the finest level's mirrored blocks (first hold)
+    TransposedPattern prolongator_columns_;  ///< Pᵀ's pattern of the finest level (first hold)
 };
 
 /// The hierarchy in float when `data_weight_ratio` (SpdSystem::data_weight_ratio) allows it
