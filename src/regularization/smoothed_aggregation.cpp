@@ -506,6 +506,7 @@ void SmoothedAggregation<Scalar>::hold(const std::vector<bool>& held) {
 template <class Scalar>
 void SmoothedAggregation<Scalar>::hold_coarse_levels() {
     constexpr double kHeldWeight = 1e-2;
+    held_coarse_.reset();  // the previous hold's levels go before the new ones are built
     const Level& fine = *levels_.front();
     if (prolongator_columns_.row.empty()) {
         fine_lower_ = transposed_pattern(fine.op);
