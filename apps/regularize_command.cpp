@@ -116,6 +116,11 @@ void add_regularization_extension_options(CLI::App& command, RegularizationExten
                        "Thin parts: the data term of a vertex whose local reach rho (physical units) is below R is "
                        "weighted (R/rho)^2, so that thin tubes and plates do not shrink (docs/accuracy.md); 0 = off. "
                        "Default 12 voxels");
+    command.add_option("--alpha-reach-sheet", o.alpha_reach_sheet,
+                       "Thin parts that are sheets (plates, shells, gaps between two walls) rather than tubes: their "
+                       "data term is weighted (R/rho)^2 with this R instead, as a flat sheet does not shrink and a "
+                       "strong weight only pins it to its staircase (docs/accuracy.md, 'Sheets and tubes'); the "
+                       "--alpha-reach value weights sheets as tubes. Default 2 voxels");
     command.add_option("--shrink-correction", o.shrink_correction,
                        "Steps of averaging of the drift of the regularized surface along u, which is then removed "
                        "(the solve's result lies slightly inside the digital surface; docs/accuracy.md); 0 = off. "

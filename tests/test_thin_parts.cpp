@@ -11,7 +11,10 @@
 #include "dsreg/implicit_shape.hpp"
 #include "dsreg/local_weights.hpp"
 #include "dsreg/pipeline.hpp"
+#include "dsreg/local_reach.hpp"
+#include "dsreg/normals.hpp"
 #include "dsreg/shrink_correction.hpp"
+#include "dsreg/thin_part_shape.hpp"
 #include "test_support.hpp"
 
 namespace dsreg {
@@ -72,6 +75,127 @@ TEST(ThinPartAlpha, InverseSquareOfTheSmallestReachAroundEachVertexBelowTheRefer
     }
     EXPECT_THROW(thin_part_alpha(surface, reach, 0.0), Error);
     EXPECT_THROW(thin_part_alpha(surface, Eigen::VectorXd::Ones(3), 12.0), Error);
+
+    // A sheet's reference replaces the tube's as its sheetness rises: R_f = 12 − s·(12 − 6).
+    for (const double sheetness : {1.0, 0.5}) {
+        Eigen::VectorXd s = Eigen::VectorXd::Zero(surface.face_count());
+        s[0] = sheetness;
+        const Eigen::VectorXd sheet_alpha = thin_part_alpha(surface, reach, 12.0, s, 6.0);
+        const double ratio = (12.0 - sheetness * 6.0) / 3.0;
+        for (std::int64_t v = 0; v < surface.vertex_count(); ++v) {
+            bool on_face_0 = false;
+            for (int k = 0; k < 4; ++k) on_face_0 |= surface.quads(0, k) == v;
+            EXPECT_DOUBLE_EQ(sheet_alpha[v], on_face_0 ? ratio * ratio : 1.0);
+        }
+    }
+    EXPECT_THROW(thin_part_alpha(surface, reach, 12.0, Eigen::VectorXd::Zero(3), 2.0), Error);
+    EXPECT_THROW(thin_part_alpha(surface, reach, 12.0, Eigen::VectorXd::Zero(surface.face_count()), -1.0), Error);
+}
+
+/// The mean sheetness of the faces whose smaller reach (along `field`) is below 12 voxels, and
+/// how many there are; only those whose thinner side is the background if `background_side`.
+std::pair<double, std::int64_t> mean_sheetness(const BinaryVolume& volume, const PointMatrix& field,
+                                               bool background_side = false) {
+    const double voxel = volume.grid.spacing.maxCoeff();
+    const DigitalSurface surface = extract_digital_surface(volume, Connectivity::TwentySix);
+    const SurfelReach reach = surfel_reach(volume, surface, field, 13.0 * voxel);
+    const Eigen::VectorXd s = thin_part_sheetness(volume, surface, field, reach, 12.0 * voxel);
+    double sum = 0;
+    std::int64_t thin = 0;
+    for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+        EXPECT_TRUE(s[f] >= 0 && s[f] <= 1);
+        if (std::min(reach.inner[f], reach.outer[f]) >= 12.0 * voxel) {
+            EXPECT_EQ(s[f], 0.0);  // not thin: not measured
+            continue;
+        }
+        if (background_side && reach.outer[f] >= reach.inner[f]) continue;
+        sum += s[f];
+        ++thin;
+    }
+    return {thin > 0 ? sum / double(thin) : 0.0, thin};
+}
+
+/// The shape's outward unit normals at the surfel centres of its digitization (grid units).
+PointMatrix exact_field(const ImplicitShape& shape, const BinaryVolume& volume) {
+    return solid_exact_normals(shape, extract_digital_surface(volume, Connectivity::TwentySix));
+}
+
+TEST(ThinPartShape, PlatesShellsAndGapsAreSheetsTubesTunnelsAndLumpsAreNot) {
+    // Object sides: a turned plate 2 voxels thick and an ellipsoidal shell 2 voxels thick (sheets),
+    // a torus of tube radius 1.5 voxels and a ball of radius 2 voxels (a lump), digitized at
+    // h = 0.25 and measured along their exact normals.
+    struct Case {
+        const char* polynomial;
+        double box;
+        bool sheet;
+    };
+    const Case shapes[] = {
+        {"((0.2*x+0.15*y)^2+(-0.12*x+0.16*y+0.15*z)^2)^4+(1.44*x-1.92*y+3.2*z)^8-1", 4.5, true},
+        {"(0.1111111*x^2+0.25*y^2+0.4444444*z^2-1)*(0.0816327*x^2+0.16*y^2+0.25*z^2-1)", 4, true},
+        {"(x^2+y^2+z^2+9-0.140625)^2-36*(x^2+y^2)", 3.6, false},
+        {"x^2+y^2+z^2-0.5625", 1.2, false},  // radius 3 voxels
+    };
+    for (const Case& c : shapes) {
+        const ImplicitShape shape = make_shape(c.polynomial, c.box);
+        const BinaryVolume volume = digitize(shape, 0.25);
+        const PointMatrix field = exact_field(shape, volume);
+        const auto [mean, thin] = mean_sheetness(volume, field);
+        EXPECT_GT(thin, 100) << c.polynomial;
+        if (c.sheet)  // less than 1: the rim of the plate is a half tube
+            EXPECT_GT(mean, 0.7) << c.polynomial;
+        else
+            EXPECT_LT(mean, 0.1) << c.polynomial;
+    }
+    // Background sides, in a 40×40×40 block: a flat gap 3 voxels wide (a sheet of background) and
+    // a straight tunnel of radius 1.5 voxels (a tube of background); the field: the axis normals.
+    // The faces of the gap's and the tunnel's walls only (the block's outer faces, whose object
+    // side is thinner than 12 voxels near the grid's border, are other parts).
+    const BinaryVolume gap = test::make_volume({40, 40, 40}, [](double x, double, double) { return std::abs(x - 20) > 1.1; });
+    const BinaryVolume tunnel = test::make_volume({40, 40, 40}, [](double x, double y, double) {
+        return (x - 20) * (x - 20) + (y - 20) * (y - 20) > 1.5 * 1.5;
+    });
+    for (const BinaryVolume* volume : {&gap, &tunnel}) {
+        const DigitalSurface surface = extract_digital_surface(*volume, Connectivity::TwentySix);
+        PointMatrix axis(surface.face_count(), 3);
+        for (std::int64_t f = 0; f < surface.face_count(); ++f) axis.row(f) = surface.surfels[std::size_t(f)].trivial_normal().transpose();
+        const auto [mean, thin] = mean_sheetness(*volume, axis, true);
+        EXPECT_GT(thin, 100);
+        if (volume == &gap)
+            EXPECT_GT(mean, 0.8);
+        else
+            EXPECT_LT(mean, 0.1);
+    }
+}
+
+TEST(ThinPartShape, SheetWeightsStraightenAThinPlateAndKeepItsVoxels) {
+    // A turned plate 1.5 voxels thick, defaults against sheets weighted as tubes
+    // (--alpha-reach-sheet at the --alpha-reach value): the tube weight (12/ρ)² pins the plate to
+    // its staircase; the sheet weight (2/ρ)² lets its faces follow the field and still keeps 99 %
+    // of its voxels (docs/accuracy.md, "Sheets and tubes": 6.8° against 11.1°).
+    const char* plate = "((0.2*x+0.15*y)^2+(-0.12*x+0.16*y+0.15*z)^2)^4+(1.92*x-2.56*y+4.266667*z)^8-1";
+    VolumeSource source;
+    source.shape = plate;
+    source.box = 4.5;
+    source.h = 0.25;
+    const ImplicitShape shape = make_shape(plate, 4.5);
+    MeshEvaluationOptions evaluation;
+    evaluation.grid_step = 0.25;
+    const auto evaluate = [&](const PipelineOptions& options, std::int64_t& sheet_faces) {
+        const PipelineResult result = run_pipeline(source, options);
+        EXPECT_TRUE(result.validity && result.validity->after.valid());
+        sheet_faces = result.sheet_faces;
+        return evaluate_mesh(PolygonMesh{result.regularization.positions, result.surface.quads, {}, {}}, shape, evaluation);
+    };
+    std::int64_t sheets = 0, sheets_as_tubes = 0;
+    const MeshEvaluation defaults = evaluate(PipelineOptions{}, sheets);
+    PipelineOptions tubes;
+    tubes.extensions.alpha_reach_sheet = 12 * 0.25;
+    const MeshEvaluation as_tubes = evaluate(tubes, sheets_as_tubes);
+    EXPECT_GT(sheets, 1000);  // of 2 730 faces
+    EXPECT_EQ(sheets_as_tubes, 0);  // not measured
+    EXPECT_LT(defaults.normal_angle_deg.mean, 0.75 * as_tubes.normal_angle_deg.mean);
+    EXPECT_LT(defaults.vertex_distance.mean, as_tubes.vertex_distance.mean);
+    EXPECT_GE(defaults.voxels.object_share(), 0.99);
 }
 
 TEST(ShrinkCorrection, UndoesAUniformShrinkOfABall) {

@@ -49,8 +49,14 @@ Eigen::VectorXd read_values_file(const std::string& path, std::int64_t expected_
 /// α·ρ² on a part of reach ρ, so with one α a part shrinks more the thinner it is (a tube 2.4
 /// voxels in radius loses half its volume with α = 1e-3). With α ∝ 1/ρ² below the reference the
 /// balance, and so the relative shrink, no longer depends on the thickness (docs/accuracy.md).
-/// Throws dsreg::Error for a reference that is not positive and finite or a wrong face count.
-Eigen::VectorXd thin_part_alpha(const DigitalSurface& surface, const Eigen::VectorXd& face_reach, double reference);
+/// A sheet has no such lever (thin_part_shape.hpp): with `face_sheetness` (one value in [0, 1]
+/// per face; empty: every thin part is a tube) the reference of face f is blended from
+/// `reference` (a tube) to `sheet_reference` (a sheet), R_f = R − s_f·(R − R_sheet), and α_i is
+/// the largest max(1, (R_f/ρ_f)²) over the faces around vertex i (ρ_f: face_reach).
+/// Throws dsreg::Error for a reference that is not positive and finite, a sheet reference that
+/// is negative or not finite, or a wrong face count.
+Eigen::VectorXd thin_part_alpha(const DigitalSurface& surface, const Eigen::VectorXd& face_reach, double reference,
+                                const Eigen::VectorXd& face_sheetness = {}, double sheet_reference = 0);
 
 /// The fairness multipliers γ_i = 1 + gain · min(1, ρ_i / full_share)² where the voxels are
 /// noisy. ρ_i is the share of faces pointing against their surfel (faces_against_their_surfels,

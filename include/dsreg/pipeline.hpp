@@ -233,6 +233,11 @@ struct RegularizationExtensions {
     /// (thin_part_alpha, local_weights.hpp); physical units; unset = 12 voxels (the largest
     /// spacing); 0 = off. Multiplies --alpha-map / --alpha-file when both are given.
     std::optional<double> alpha_reach;
+    /// --alpha-reach-sheet: the reference reach R_sheet of the thin parts that are sheets rather than
+    /// tubes (thin_part_sheetness, thin_part_shape.hpp): their data term is weighted max(1,
+    /// (R_sheet/ρ)²) instead; physical units; unset = 2 voxels (the largest spacing); equal to
+    /// the --alpha-reach reference: every thin part weighted as a tube (and the sheetness not measured).
+    std::optional<double> alpha_reach_sheet;
     /// --shrink-correction: averaging steps of correct_shrink (shrink_correction.hpp) applied to
     /// the solve's result; unset = 40 (off with --clamp, whose boxes it could leave); 0 = off.
     std::optional<int> shrink_correction;
@@ -310,6 +315,8 @@ struct PipelineResult {
     RegularizationResult regularization;
     /// Faces of the final mesh whose mean normal points against u (count_faces_against_field).
     std::int64_t faces_against_field = 0;
+    /// Faces of a thin part measured as a sheet (sheetness ≥ 1/2, thin_part_shape.hpp).
+    std::int64_t sheet_faces = 0;
     /// The check and repair of the solved mesh (stage "validity"), unless ValidityMode::Off. With a
     /// repair, regularization.positions and field.normals are the repaired ones (the solve's
     /// energies stay in regularization; the repair's are here).

@@ -31,7 +31,7 @@ PipelineResult welded_pipeline_result(WeldedRun run, const BlockPlan& plan) {
     r.field.normals = std::move(run.welded.normals);
     r.field.faces_against_surfels.clear();  // faces of one block's patch, not of the welded surface
     r.weights = RegularizationWeights{o.alpha, o.beta, o.gamma, {}, {}};
-    apply_regularization_extensions(o.extensions, r.surface, r.field, Eigen::VectorXd(), r.weights);  // no thin-part weights
+    apply_regularization_extensions(o.extensions, r.surface, r.field, ThinParts(), r.weights);  // no thin-part weights
     RegularizationResult& reg = r.regularization;
     reg.positions = std::move(run.welded.positions);
     reg.solve = run.solve;

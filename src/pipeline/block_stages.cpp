@@ -38,6 +38,7 @@ void refuse_global_options(const PipelineOptions& o, const std::string& driver) 
     const std::string whole = "it is measured on the whole object (not block by block yet)";
     refuse(o.normals.max_radius.has_value(), "--ii-max-radius", whole);
     refuse(e.alpha_reach && *e.alpha_reach > 0, "--alpha-reach", whole);
+    refuse(e.alpha_reach_sheet.has_value(), "--alpha-reach-sheet", whole);
     refuse(e.shrink_correction && *e.shrink_correction > 0, "--shrink-correction", whole);
     refuse(e.noise_fairness && *e.noise_fairness > 0, "--noise-fairness", whole);
 }
@@ -178,7 +179,7 @@ BlockStages run_block_stages(const VolumeSource& source, const BlockPlan& plan, 
         b.field = compute_normal_field(o.normals, loaded, b.patch.surface, clock);
         clock.start("assembly");
         b.weights = RegularizationWeights{o.alpha, o.beta, o.gamma, {}, {}};
-        apply_regularization_extensions(o.extensions, b.patch.surface, b.field, Eigen::VectorXd(), b.weights);
+        apply_regularization_extensions(o.extensions, b.patch.surface, b.field, ThinParts(), b.weights);
         const DigitalSurface& s = b.patch.surface;
         b.system = assembly == BlockAssembly::matrix_and_rhs
                        ? assemble_regularization_system(s.vertices, s.quads, vertex_links(s.quads, s.vertex_count()),

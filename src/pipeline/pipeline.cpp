@@ -16,6 +16,7 @@
 #include "dsreg/mesh_io.hpp"
 #include "dsreg/normals_file.hpp"
 #include "dsreg/text.hpp"
+#include "dsreg/thin_part_shape.hpp"
 #include "dsreg/world_space.hpp"
 #include "dsreg/output_paths.hpp"
 #include "pipeline_stages.hpp"
@@ -42,16 +43,22 @@ void check_weight_flags(const PipelineOptions& o) {
     validate_weights(global_weights(o), 0, 0);
 }
 
-/// The faces' reach for the thin-part data weights (empty when --alpha-reach 0), measured along
-/// the field used, whatever made it: so a field read back from --export-normals gives the same
-/// weights, and so the same mesh (the adaptive field's own reach follows its first field).
-Eigen::VectorXd thin_part_reach(const RegularizationExtensions& o, const VoxelLabels& volume,
-                                const DigitalSurface& surface, const NormalField& field) {
+/// The faces' reach and sheetness for the thin-part data weights (empty when --alpha-reach 0),
+/// measured along the field used, whatever made it: so a field read back from --export-normals
+/// gives the same weights, and so the same mesh (the adaptive field's own reach follows its
+/// first field). The sheetness is measured at each face's own reach, the weights use the largest
+/// reach within a few rings (max_over_rings: one voxel of noise is not a thin part).
+ThinParts thin_parts(const RegularizationExtensions& o, const VoxelLabels& volume, const DigitalSurface& surface,
+                     const NormalField& field) {
     const double reference = alpha_reach(o, volume.grid());
     if (reference <= 0) return {};
     const double cap = reference + volume.grid().spacing.maxCoeff();
-    SurfelReach reach = surfel_reach(volume, surface, field.normals, cap);
-    return max_over_rings(surface, reach.smallest(), AdaptiveNormalOptions{}.reach_rings);
+    const SurfelReach reach = surfel_reach(volume, surface, field.normals, cap);
+    ThinParts parts;
+    parts.reach = max_over_rings(surface, reach.smallest(), AdaptiveNormalOptions{}.reach_rings);
+    if (sheet_alpha_reach(o, volume.grid()) != reference)
+        parts.sheetness = thin_part_sheetness(volume, surface, field.normals, reach, reference);
+    return parts;
 }
 
 std::string component_text(std::int64_t count) {
@@ -162,9 +169,9 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
 
     clock.start("regularize");
     result.weights = global_weights(o);
-    apply_regularization_extensions(o.extensions, result.surface, result.field,
-                                    thin_part_reach(o.extensions, loaded.voxel_labels(), result.surface, result.field),
-                                    result.weights);
+    const ThinParts thin = thin_parts(o.extensions, loaded.voxel_labels(), result.surface, result.field);
+    result.sheet_faces = (thin.sheetness.array() >= 0.5).count();
+    apply_regularization_extensions(o.extensions, result.surface, result.field, thin, result.weights);
     SolverOptions solver;
     solver.kind = o.solver;
     solver.max_error_voxels = o.max_error_voxels;  // iterative solvers: within this of the exact answer
@@ -489,6 +496,8 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
     }
     if (r.weights.vertex_alpha.size() > 0)
         report["thin_part_alpha"] = {{"reference_reach", alpha_reach(o.extensions, r.grid)},
+                                     {"sheet_reference_reach", sheet_alpha_reach(o.extensions, r.grid)},
+                                     {"sheet_faces", r.sheet_faces},
                                      {"multiplier_max", r.weights.vertex_alpha.maxCoeff()},
                                      {"vertices_above_one", (r.weights.vertex_alpha.array() > 1.0).count()}};
     if (r.weights.vertex_gamma.size() > 0 && noise_fairness(o.extensions) > 0 && !field.faces_against_surfels.empty())

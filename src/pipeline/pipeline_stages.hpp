@@ -30,6 +30,16 @@ nlohmann::json at_report(const NormalFieldOptions& options, const NormalField& f
 /// The reference reach of --alpha-reach in physical units (its default: 12 voxels); 0 = off.
 double alpha_reach(const RegularizationExtensions& options, const VoxelGrid& grid);
 
+/// The reference reach of the thin sheets, --alpha-reach-sheet, in physical units (its default: 2
+/// voxels).
+double sheet_alpha_reach(const RegularizationExtensions& options, const VoxelGrid& grid);
+
+/// What the thin-part data weights are made from: the faces' reach (empty: no thin-part
+/// weights) and, where the sheets get their own reference, the faces' sheetness (else empty).
+struct ThinParts {
+    Eigen::VectorXd reach, sheetness;
+};
+
 /// The report's energy object: the three terms of eq. (1) without their weights, and the total.
 nlohmann::json energy_json(const EnergyTerms& terms, const RegularizationWeights& weights);
 
@@ -42,10 +52,10 @@ Eigen::VectorXd noise_multipliers(const RegularizationExtensions& options, const
 
 /// Fills the metric (W0, W2) and the local multipliers of `weights` for this surface and normal
 /// field, reading the maps or files, the noise fairness multipliers (from the field's faces
-/// against their surfels) and, given the faces' reach (empty: none), the thin-part data
+/// against their surfels) and, given the thin parts' reach (empty: none), the thin-part data
 /// weights; then validates the weights. Throws dsreg::Error.
 void apply_regularization_extensions(const RegularizationExtensions& options, const DigitalSurface& surface,
-                                     const NormalField& field, const Eigen::VectorXd& face_reach,
+                                     const NormalField& field, const ThinParts& thin_parts,
                                      RegularizationWeights& weights);
 
 /// regularize() with `solver` then correct_shrink() (--shrink-correction; the energy after is that

@@ -127,6 +127,10 @@ double alpha_reach(const RegularizationExtensions& o, const VoxelGrid& grid) {
     return o.alpha_reach ? *o.alpha_reach : 12.0 * grid.spacing.maxCoeff();
 }
 
+double sheet_alpha_reach(const RegularizationExtensions& o, const VoxelGrid& grid) {
+    return o.alpha_reach_sheet ? *o.alpha_reach_sheet : 2.0 * grid.spacing.maxCoeff();
+}
+
 nlohmann::json energy_json(const EnergyTerms& e, const RegularizationWeights& w) {
     return {{"data", e.data}, {"alignment", e.alignment}, {"fairness", e.fairness}, {"total", e.total(w)}};
 }
@@ -134,6 +138,8 @@ nlohmann::json energy_json(const EnergyTerms& e, const RegularizationWeights& w)
 void check_regularization_extensions(const RegularizationExtensions& o) {
     if (o.alpha_reach && (!(*o.alpha_reach >= 0) || !std::isfinite(*o.alpha_reach)))
         throw Error("--alpha-reach must be zero (off) or positive");
+    if (o.alpha_reach_sheet && (!(*o.alpha_reach_sheet >= 0) || !std::isfinite(*o.alpha_reach_sheet)))
+        throw Error("--alpha-reach-sheet must be zero (no weight on sheets) or positive");
     if (o.noise_fairness && (!(*o.noise_fairness >= 0) || !std::isfinite(*o.noise_fairness)))
         throw Error("--noise-fairness must be zero (off) or positive");
     if (o.shrink_correction && *o.shrink_correction < 0) throw Error("--shrink-correction must be 0 (off) or positive");
@@ -148,7 +154,7 @@ void check_regularization_extensions(const RegularizationExtensions& o) {
 }
 
 void apply_regularization_extensions(const RegularizationExtensions& o, const DigitalSurface& surface,
-                                     const NormalField& field, const Eigen::VectorXd& face_reach,
+                                     const NormalField& field, const ThinParts& thin_parts,
                                      RegularizationWeights& weights) {
     check_regularization_extensions(o);
     apply_metric(parse_metric_kind(o.metric), surface, field.normals, weights);
@@ -157,8 +163,9 @@ void apply_regularization_extensions(const RegularizationExtensions& o, const Di
     const Eigen::VectorXd noisy = noise_multipliers(o, surface, field);
     if (noisy.size() > 0)
         weights.vertex_gamma = weights.vertex_gamma.size() > 0 ? Eigen::VectorXd(weights.vertex_gamma.cwiseProduct(noisy)) : noisy;
-    if (face_reach.size() > 0) {
-        const Eigen::VectorXd thin = thin_part_alpha(surface, face_reach, alpha_reach(o, surface.grid));
+    if (thin_parts.reach.size() > 0) {
+        const Eigen::VectorXd thin = thin_part_alpha(surface, thin_parts.reach, alpha_reach(o, surface.grid),
+                                                     thin_parts.sheetness, sheet_alpha_reach(o, surface.grid));
         weights.vertex_alpha = weights.vertex_alpha.size() > 0 ? Eigen::VectorXd(weights.vertex_alpha.cwiseProduct(thin)) : thin;
     }
     validate_weights(weights, surface.vertex_count(), surface.face_count());

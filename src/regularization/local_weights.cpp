@@ -57,22 +57,27 @@ Eigen::VectorXd sample_at_vertices(const ScalarVolume& volume, const DigitalSurf
     return samples;
 }
 
-Eigen::VectorXd thin_part_alpha(const DigitalSurface& surface, const Eigen::VectorXd& face_reach, double reference) {
+Eigen::VectorXd thin_part_alpha(const DigitalSurface& surface, const Eigen::VectorXd& face_reach, double reference,
+                                const Eigen::VectorXd& face_sheetness, double sheet_reference) {
     if (!(reference > 0) || !std::isfinite(reference))
         throw Error("thin_part_alpha: the reference reach must be positive and finite");
-    if (face_reach.size() != surface.face_count())
-        throw Error("thin_part_alpha: one reach per face expected (got " + std::to_string(face_reach.size()) + " for " +
-                    std::to_string(surface.face_count()) + " faces)");
-    Eigen::VectorXd vertex_reach = Eigen::VectorXd::Constant(surface.vertex_count(), reference);
-    for (std::int64_t f = 0; f < surface.face_count(); ++f)
+    if (!(sheet_reference >= 0) || !std::isfinite(sheet_reference))
+        throw Error("thin_part_alpha: the sheet reference reach must be zero or positive and finite");
+    const std::int64_t m = surface.face_count();
+    if (face_reach.size() != m || (face_sheetness.size() != 0 && face_sheetness.size() != m))
+        throw Error("thin_part_alpha: one reach (and one sheetness, if any) per face expected (got " +
+                    std::to_string(face_reach.size()) + " and " + std::to_string(face_sheetness.size()) + " for " +
+                    std::to_string(m) + " faces)");
+    Eigen::VectorXd alpha = Eigen::VectorXd::Ones(surface.vertex_count());
+    for (std::int64_t f = 0; f < m; ++f) {
+        const double sheetness = face_sheetness.size() > 0 ? std::clamp(face_sheetness[f], 0.0, 1.0) : 0.0;
+        const double ratio = (reference - sheetness * (reference - sheet_reference)) / face_reach[f];
         for (int k = 0; k < 4; ++k) {
-            double& r = vertex_reach[surface.quads(f, k)];
-            r = std::min(r, face_reach[f]);
+            double& a = alpha[surface.quads(f, k)];
+            a = std::max(a, ratio * ratio);
         }
-    return vertex_reach.unaryExpr([reference](double r) {
-        const double ratio = reference / r;
-        return ratio * ratio;
-    });
+    }
+    return alpha;
 }
 
 Eigen::VectorXd noise_fairness_gamma(const DigitalSurface& surface, const std::vector<std::int32_t>& faces_against_surfels,
