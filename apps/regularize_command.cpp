@@ -125,6 +125,11 @@ void add_regularization_extension_options(CLI::App& command, RegularizationExten
                        "Steps of averaging of the drift of the regularized surface along u, which is then removed "
                        "(the solve's result lies slightly inside the digital surface; docs/accuracy.md); 0 = off. "
                        "Default 40, off with --clamp");
+    command.add_option("--shrink-local-steps", o.shrink_local_steps,
+                       "On thin tubes (reach below a third of the --alpha-reach reference; not where the voxels are "
+                       "noisy) the drift of --shrink-correction is averaged over this many steps instead, so that a "
+                       "tube's convex side, which drifts in further, is corrected too (docs/accuracy.md, 'Local shrink "
+                       "on thin tubes'); 0 = off. Default 10");
     command.add_option("--noise-fairness", o.noise_fairness,
                        "Noisy voxels: the fairness of a vertex where a share rho of the faces around it have an estimated "
                        "normal pointing into the object is weighted 1 + G min(1, rho/0.02)^2 (docs/accuracy.md); 0 = off. "

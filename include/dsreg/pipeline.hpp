@@ -241,6 +241,10 @@ struct RegularizationExtensions {
     /// --shrink-correction: averaging steps of correct_shrink (shrink_correction.hpp) applied to
     /// the solve's result; unset = 40 (off with --clamp, whose boxes it could leave); 0 = off.
     std::optional<int> shrink_correction;
+    /// --shrink-local-steps: on thin tubes (thin-part multiplier above 9, i.e. reach below a third
+    /// of the --alpha-reach reference; not where the noise fairness is raised) the drift is averaged
+    /// over this many steps instead (correct_shrink's local_share); unset = 10; 0 = off.
+    std::optional<int> shrink_local_steps;
     /// --noise-fairness: gain G of the fairness multipliers 1 + G min(1, ρ/0.02)² where a share ρ
     /// of the faces around a vertex point against their surfel (noise_fairness_gamma,
     /// local_weights.hpp); unset = 12; 0 = off. Multiplies --gamma-map / --gamma-file.

@@ -30,8 +30,13 @@ struct ShrinkCorrection {
 /// `positions`: the regularized vertices of `surface`; `normals`: its field u (one unit vector
 /// per face); `steps`: averaging steps (each spreads the average by one face; 0 returns the
 /// positions unchanged). The vertex normal is the normalized sum of u over the vertex's faces.
-/// Throws dsreg::Error for sizes that do not match the surface or a negative step count.
+/// `local_share` (empty, or one value in [0, 1] per face) blends each face's averaged offset
+/// towards its average over `local_steps` (< steps) instead: where a thin tube's drift is not
+/// uniform around it (its convex outer side drifts in further than its inner side), the wide
+/// average, which spans the tube's whole circumference, takes only the mean (docs/accuracy.md,
+/// "Local shrink on thin tubes"). Throws dsreg::Error for sizes that do not match the surface or a
+/// negative step count.
 ShrinkCorrection correct_shrink(const DigitalSurface& surface, const PointMatrix& positions, const PointMatrix& normals,
-                                int steps);
+                                int steps, const Eigen::VectorXd& local_share = {}, int local_steps = 0);
 
 }  // namespace dsreg

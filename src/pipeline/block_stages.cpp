@@ -40,6 +40,7 @@ void refuse_global_options(const PipelineOptions& o, const std::string& driver) 
     refuse(e.alpha_reach && *e.alpha_reach > 0, "--alpha-reach", whole);
     refuse(e.alpha_reach_sheet.has_value(), "--alpha-reach-sheet", whole);
     refuse(e.shrink_correction && *e.shrink_correction > 0, "--shrink-correction", whole);
+    refuse(e.shrink_local_steps.has_value(), "--shrink-local-steps", whole);
     refuse(e.noise_fairness && *e.noise_fairness > 0, "--noise-fairness", whole);
 }
 

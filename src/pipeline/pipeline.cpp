@@ -171,13 +171,14 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
     result.weights = global_weights(o);
     const ThinParts thin = thin_parts(o.extensions, loaded.voxel_labels(), result.surface, result.field);
     result.sheet_faces = (thin.sheetness.array() >= 0.5).count();
-    apply_regularization_extensions(o.extensions, result.surface, result.field, thin, result.weights);
+    const Eigen::VectorXd local_shrink =
+        apply_regularization_extensions(o.extensions, result.surface, result.field, thin, result.weights);
     SolverOptions solver;
     solver.kind = o.solver;
     solver.max_error_voxels = o.max_error_voxels;  // iterative solvers: within this of the exact answer
     solver.progress = clock.progress();             // each iteration, as stage "solve" (and "clamp")
     result.regularization = run_regularization(o.extensions, loaded.volume, result.surface, result.field.normals,
-                                               result.weights, solver, result.extension_report);
+                                               result.weights, local_shrink, solver, result.extension_report);
     clock.finish(result.regularization.solve.solver + ", relative residual " +
                  format("%.2e", result.regularization.solve.relative_residual));
     // On a label map, the complex: its junction edges are shared by three faces or more, which

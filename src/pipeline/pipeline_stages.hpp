@@ -53,10 +53,18 @@ Eigen::VectorXd noise_multipliers(const RegularizationExtensions& options, const
 /// Fills the metric (W0, W2) and the local multipliers of `weights` for this surface and normal
 /// field, reading the maps or files, the noise fairness multipliers (from the field's faces
 /// against their surfels) and, given the thin parts' reach (empty: none), the thin-part data
-/// weights; then validates the weights. Throws dsreg::Error.
-void apply_regularization_extensions(const RegularizationExtensions& options, const DigitalSurface& surface,
-                                     const NormalField& field, const ThinParts& thin_parts,
-                                     RegularizationWeights& weights);
+/// weights; then validates the weights. Returns the faces whose shrink is corrected locally
+/// (local_shrink_share; empty without thin-part weights). Throws dsreg::Error.
+Eigen::VectorXd apply_regularization_extensions(const RegularizationExtensions& options, const DigitalSurface& surface,
+                                                const NormalField& field, const ThinParts& thin_parts,
+                                                RegularizationWeights& weights);
+
+/// correct_shrink's local share: 1 on the faces that touch a vertex whose thin-part multiplier
+/// exceeds 9 (a tube whose reach is below a third of its reference) unless they touch a vertex
+/// whose fairness the noise fairness raised (there the local drift is the noise's), else 0.
+/// Empty if `thin_alpha` is.
+Eigen::VectorXd local_shrink_share(const DigitalSurface& surface, const Eigen::VectorXd& thin_alpha,
+                                   const Eigen::VectorXd& noise_gamma);
 
 /// regularize() with `solver` then correct_shrink() (--shrink-correction; the energy after is that
 /// of the corrected positions), or with --clamp regularize_clamped() with the same solver choice.
@@ -65,7 +73,7 @@ void apply_regularization_extensions(const RegularizationExtensions& options, co
 /// unclamped comparison, voxel-centre classification of `volume`).
 RegularizationResult run_regularization(const RegularizationExtensions& options, const BinaryVolume& volume,
                                         const DigitalSurface& surface, const PointMatrix& normals,
-                                        const RegularizationWeights& weights, const SolverOptions& solver,
-                                        nlohmann::json& report);
+                                        const RegularizationWeights& weights, const Eigen::VectorXd& local_shrink,
+                                        const SolverOptions& solver, nlohmann::json& report);
 
 }  // namespace dsreg

@@ -143,6 +143,7 @@ void check_regularization_extensions(const RegularizationExtensions& o) {
     if (o.noise_fairness && (!(*o.noise_fairness >= 0) || !std::isfinite(*o.noise_fairness)))
         throw Error("--noise-fairness must be zero (off) or positive");
     if (o.shrink_correction && *o.shrink_correction < 0) throw Error("--shrink-correction must be 0 (off) or positive");
+    if (o.shrink_local_steps && *o.shrink_local_steps < 0) throw Error("--shrink-local-steps must be 0 (off) or positive");
     if (o.shrink_correction && *o.shrink_correction > 0 && o.clamp)
         throw Error("--shrink-correction moves vertices out of the --clamp boxes: do not combine them");
     if (!(o.clamp_tolerance > 0) || !std::isfinite(o.clamp_tolerance)) throw Error("--clamp-tolerance must be positive");
@@ -153,9 +154,26 @@ void check_regularization_extensions(const RegularizationExtensions& o) {
             throw Error(std::string("give either --") + w.name + "-map or --" + w.name + "-file, not both");
 }
 
-void apply_regularization_extensions(const RegularizationExtensions& o, const DigitalSurface& surface,
-                                     const NormalField& field, const ThinParts& thin_parts,
-                                     RegularizationWeights& weights) {
+Eigen::VectorXd local_shrink_share(const DigitalSurface& surface, const Eigen::VectorXd& thin_alpha,
+                                   const Eigen::VectorXd& noise_gamma) {
+    if (thin_alpha.size() == 0) return {};
+    constexpr double kThinTubeAlpha = 9;  // (R/ρ)² > 9: ρ < R/3, 4 voxels with the default R
+    Eigen::VectorXd share = Eigen::VectorXd::Zero(surface.face_count());
+    for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+        bool thin = false, noisy = false;
+        for (int k = 0; k < 4; ++k) {
+            const std::int32_t v = surface.quads(f, k);
+            thin |= thin_alpha[v] > kThinTubeAlpha;
+            noisy |= noise_gamma.size() > 0 && noise_gamma[v] > 1;
+        }
+        share[f] = thin && !noisy ? 1.0 : 0.0;
+    }
+    return share;
+}
+
+Eigen::VectorXd apply_regularization_extensions(const RegularizationExtensions& o, const DigitalSurface& surface,
+                                                const NormalField& field, const ThinParts& thin_parts,
+                                                RegularizationWeights& weights) {
     check_regularization_extensions(o);
     apply_metric(parse_metric_kind(o.metric), surface, field.normals, weights);
     for (const WeightSource& w : weight_sources(o))
@@ -163,29 +181,36 @@ void apply_regularization_extensions(const RegularizationExtensions& o, const Di
     const Eigen::VectorXd noisy = noise_multipliers(o, surface, field);
     if (noisy.size() > 0)
         weights.vertex_gamma = weights.vertex_gamma.size() > 0 ? Eigen::VectorXd(weights.vertex_gamma.cwiseProduct(noisy)) : noisy;
+    Eigen::VectorXd thin;
     if (thin_parts.reach.size() > 0) {
-        const Eigen::VectorXd thin = thin_part_alpha(surface, thin_parts.reach, alpha_reach(o, surface.grid),
-                                                     thin_parts.sheetness, sheet_alpha_reach(o, surface.grid));
+        thin = thin_part_alpha(surface, thin_parts.reach, alpha_reach(o, surface.grid), thin_parts.sheetness,
+                               sheet_alpha_reach(o, surface.grid));
         weights.vertex_alpha = weights.vertex_alpha.size() > 0 ? Eigen::VectorXd(weights.vertex_alpha.cwiseProduct(thin)) : thin;
     }
     validate_weights(weights, surface.vertex_count(), surface.face_count());
+    return local_shrink_share(surface, thin, noisy);
 }
 
 RegularizationResult run_regularization(const RegularizationExtensions& o, const BinaryVolume& volume, const DigitalSurface& surface,
                                         const PointMatrix& normals, const RegularizationWeights& weights,
-                                        const SolverOptions& solver, nlohmann::json& report) {
+                                        const Eigen::VectorXd& local_shrink, const SolverOptions& solver,
+                                        nlohmann::json& report) {
     report["metric"] = o.metric;
     report["local_weights"] = local_weights_json(o, weights);
     if (!o.clamp) {
         RegularizationResult result = regularize(surface, normals, weights, solver);
         const int steps = o.shrink_correction.value_or(40);
         if (steps == 0) return result;
-        const ShrinkCorrection correction = correct_shrink(surface, result.positions, normals, steps);
+        const int local_steps = o.shrink_local_steps.value_or(10);
+        const Eigen::VectorXd local = local_steps > 0 ? local_shrink : Eigen::VectorXd();
+        const ShrinkCorrection correction = correct_shrink(surface, result.positions, normals, steps, local, local_steps);
         const EnergyTerms solved = result.energy_after;
         result.positions = correction.positions;
         result.energy_after = regularization_energy(result.positions, surface.vertices, surface.quads,
                                                     fairness_links(surface), normals, weights);
         report["shrink_correction"] = {{"steps", steps},
+                                       {"local_steps", local_steps},
+                                       {"local_faces", local.size() > 0 ? (local.array() > 0).count() : 0},
                                        {"mean_shift", correction.mean_shift},
                                        {"max_shift", correction.max_shift},
                                        {"energy_of_the_solve", solved.total(weights)}};

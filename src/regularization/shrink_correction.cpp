@@ -79,17 +79,25 @@ Eigen::VectorXd average_over_faces(const DigitalSurface& surface, Eigen::VectorX
 }  // namespace
 
 ShrinkCorrection correct_shrink(const DigitalSurface& surface, const PointMatrix& positions, const PointMatrix& normals,
-                                int steps) {
+                                int steps, const Eigen::VectorXd& local_share, int local_steps) {
     if (positions.rows() != surface.vertex_count() || normals.rows() != surface.face_count())
         throw Error("correct_shrink: " + std::to_string(positions.rows()) + " positions and " +
                     std::to_string(normals.rows()) + " normals for a surface of " +
                     std::to_string(surface.vertex_count()) + " vertices and " + std::to_string(surface.face_count()) +
                     " faces");
-    if (steps < 0) throw Error("correct_shrink: the number of averaging steps must not be negative");
+    if (steps < 0 || local_steps < 0) throw Error("correct_shrink: the number of averaging steps must not be negative");
+    if (local_share.size() != 0 && local_share.size() != surface.face_count())
+        throw Error("correct_shrink: " + std::to_string(local_share.size()) + " local shares for " +
+                    std::to_string(surface.face_count()) + " faces");
     ShrinkCorrection result;
     result.positions = positions;
     if (steps == 0) return result;
-    const Eigen::VectorXd drift = average_over_faces(surface, face_offsets(surface, positions, normals), steps);
+    const Eigen::VectorXd offsets = face_offsets(surface, positions, normals);
+    Eigen::VectorXd drift = average_over_faces(surface, offsets, steps);
+    if (local_share.size() > 0 && (local_share.array() > 0).any()) {
+        const Eigen::VectorXd local = average_over_faces(surface, offsets, local_steps);
+        drift += local_share.cwiseMax(0.0).cwiseMin(1.0).cwiseProduct(local - drift);
+    }
     const std::int64_t n = surface.vertex_count();
     PointMatrix vertex_normal = PointMatrix::Zero(n, 3);
     Eigen::VectorXd vertex_drift = Eigen::VectorXd::Zero(n), faces = Eigen::VectorXd::Zero(n);
