@@ -21,6 +21,20 @@
 namespace dsreg {
 namespace {
 
+/// A polynomial shape (F ≤ 0 inside) of the box [−box, box]³, digitized at h = 0.25.
+VolumeSource shape_at_quarter_step(const char* polynomial, double box) {
+    VolumeSource source;
+    source.shape = polynomial;
+    source.box = box;
+    source.h = 0.25;
+    return source;
+}
+
+/// The regularized mesh of a pipeline run.
+PolygonMesh solved_mesh(const PipelineResult& result) {
+    return PolygonMesh{result.regularization.positions, result.surface.quads, {}, {}};
+}
+
 struct ThinCase {
     const char* polynomial;
     double box;
@@ -33,13 +47,10 @@ TEST(ThinParts, TubeAndShellKeepTheirVolumeAndVoxelsWithTheDefaults) {
         {"(0.1111111*x^2+0.25*y^2+0.4444444*z^2-1)*(0.0816327*x^2+0.16*y^2+0.25*z^2-1)", 4, false},  // 2 voxels thick
     };
     for (const ThinCase& c : cases) {
-        VolumeSource source;
-        source.shape = c.polynomial;
-        source.box = c.box;
-        source.h = 0.25;
+        const VolumeSource source = shape_at_quarter_step(c.polynomial, c.box);
         const PipelineResult result = run_pipeline(source, PipelineOptions{});
         const ImplicitShape shape = make_shape(c.polynomial, c.box);
-        const PolygonMesh mesh{result.regularization.positions, result.surface.quads, {}, {}};
+        const PolygonMesh mesh = solved_mesh(result);
         const double truth = shape_volume(shape, 16);
         const double volume = enclosed_volume(mesh.vertices, mesh_triangles(mesh.vertices, mesh.faces));
         EXPECT_NEAR(volume / truth, 1.0, 0.03) << c.polynomial;
@@ -174,10 +185,7 @@ TEST(ThinPartShape, SheetWeightsStraightenAThinPlateAndKeepItsVoxels) {
     // its staircase; the sheet weight (2/ρ)² lets its faces follow the field and still keeps 99 %
     // of its voxels (docs/accuracy.md, "Sheets and tubes": 6.8° against 11.1°).
     const char* plate = "((0.2*x+0.15*y)^2+(-0.12*x+0.16*y+0.15*z)^2)^4+(1.92*x-2.56*y+4.266667*z)^8-1";
-    VolumeSource source;
-    source.shape = plate;
-    source.box = 4.5;
-    source.h = 0.25;
+    const VolumeSource source = shape_at_quarter_step(plate, 4.5);
     const ImplicitShape shape = make_shape(plate, 4.5);
     MeshEvaluationOptions evaluation;
     evaluation.grid_step = 0.25;
@@ -185,7 +193,7 @@ TEST(ThinPartShape, SheetWeightsStraightenAThinPlateAndKeepItsVoxels) {
         const PipelineResult result = run_pipeline(source, options);
         EXPECT_TRUE(result.validity && result.validity->after.valid());
         sheet_faces = result.sheet_faces;
-        return evaluate_mesh(PolygonMesh{result.regularization.positions, result.surface.quads, {}, {}}, shape, evaluation);
+        return evaluate_mesh(solved_mesh(result), shape, evaluation);
     };
     std::int64_t sheets = 0, sheets_as_tubes = 0;
     const MeshEvaluation defaults = evaluate(PipelineOptions{}, sheets);
@@ -293,16 +301,12 @@ TEST(ShrinkCorrection, LocalStepsOnThinTubesKeepTheirVoxels) {
     // left 16 voxel centres 0.04–0.08 voxel inside the true surface outside the mesh (98.9 %);
     // the 10-step average on thin tubes keeps them (docs/accuracy.md, "Local shrink on thin tubes").
     const char* torus = "(x^2+y^2+z^2+9-0.36)^2-36*(x^2+y^2)";
-    VolumeSource source;
-    source.shape = torus;
-    source.box = 4;
-    source.h = 0.25;
+    const VolumeSource source = shape_at_quarter_step(torus, 4);
     const BinaryVolume voxels = digitize(make_shape(torus, 4), 0.25);
     const auto object_share = [&](const PipelineOptions& options, std::int64_t& local_faces) {
         const PipelineResult result = run_pipeline(source, options);
         local_faces = result.extension_report["shrink_correction"].value("local_faces", std::int64_t(-1));
-        return classify_voxel_centres(PolygonMesh{result.regularization.positions, result.surface.quads, {}, {}}, voxels)
-            .object_share();
+        return classify_voxel_centres(solved_mesh(result), voxels).object_share();
     };
     std::int64_t local_faces = 0, none = 0;
     PipelineOptions wide_only;
