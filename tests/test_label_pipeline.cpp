@@ -224,7 +224,10 @@ TEST(LabelPipeline, LabelMapsAreRepairedIntoValidSolidsThatKeepTheirVolumes) {
     // default, and each label's closed surface is a valid solid on its own. The repair spreads
     // from a junction into the sheets that meet there (its rings cross every edge, not only the
     // junction-aware fairness links, which give a junction point none), so it takes few rounds
-    // and each label keeps its solved volume within 0.5 % (docs/multi-label.md).
+    // and each label keeps its solved volume within 0.5 % (docs/multi-label.md). The vertices at
+    // the inner corners of the junction curves' turns are strengthened alone (their folds are
+    // slivers between the smoothed curve and its staircase): a smaller region than with their
+    // rings graded, for a round or two more.
     for (const std::string name : {"sectors", "layers"}) {
         SCOPED_TRACE(name);
         PipelineOptions defaults;
@@ -233,7 +236,7 @@ TEST(LabelPipeline, LabelMapsAreRepairedIntoValidSolidsThatKeepTheirVolumes) {
         ASSERT_TRUE(result.validity.has_value());
         EXPECT_GT(result.validity->before.intersecting_pairs + result.validity->before.folded_faces, 0);
         EXPECT_GT(result.validity->rounds, 0);
-        EXPECT_LE(result.validity->rounds, 5);
+        EXPECT_LE(result.validity->rounds, 8);
         EXPECT_TRUE(result.validity->after.valid());
         EXPECT_TRUE(check_mesh_validity(result.regularization.positions, result.surface.quads, result.field.normals).valid());
         for (const LabelMesh& own : result.label_meshes) {
@@ -250,6 +253,16 @@ TEST(LabelPipeline, LabelMapsAreRepairedIntoValidSolidsThatKeepTheirVolumes) {
         EXPECT_EQ(solved.validity->rounds, 0);
         EXPECT_EQ(solved.validity->before.intersecting_pairs, result.validity->before.intersecting_pairs);
         EXPECT_EQ(solved.validity->before.folded_faces, result.validity->before.folded_faces);
+        ValidityRepairOptions graded;
+        graded.grade_junction_turns = true;
+        const auto repair = [&](const ValidityRepairOptions& options) {
+            return repair_validity(solved.surface, solved.field.normals, solved.weights, solved.regularization.positions, options);
+        };
+        const ValidityRepairResult alone = repair({}), with_rings = repair(graded);
+        EXPECT_TRUE(alone.report.after.valid());
+        EXPECT_TRUE(with_rings.report.after.valid());
+        EXPECT_LT(alone.report.region_vertices, with_rings.report.region_vertices);
+        EXPECT_LT(alone.report.strengthened_vertices, with_rings.report.strengthened_vertices);
         ASSERT_EQ(solved.label_measures.size(), result.label_measures.size());
         for (std::size_t k = 0; k < result.label_measures.size(); ++k) {
             SCOPED_TRACE("label " + std::to_string(result.label_measures[k].value));

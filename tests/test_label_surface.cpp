@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <climits>
 #include <map>
 #include <random>
 #include <set>
@@ -241,6 +243,41 @@ TEST(LabelSurface, OneLabelAcrossAnEdgeOfTwoOthers) {
             EXPECT_EQ(meshes[0].pinch_vertices, 2);
             EXPECT_EQ(meshes[0].component_count, 2);
         }
+    }
+}
+
+TEST(LabelSurface, JunctionTurnsAreTheCornersOfAnInterfaceRectangle) {
+    // Two boxes of labels 1 and 2 side by side (x), background around: the interface is a 3×3
+    // square of faces whose border is a junction curve (labels 1, 2, 0) turning at its four
+    // corners. Only there does a face (the interface's corner face) have both edges at a vertex
+    // on junction edges; the background-facing faces along the curve have one junction edge
+    // each, and the edges of the boxes are manifold edges.
+    const LabelVolume labels = test::make_labels({6, 5, 5}, [](std::int64_t i, std::int64_t j, std::int64_t k) -> std::int64_t {
+        if (j < 1 || j > 3 || k < 1 || k > 3 || i < 1 || i > 4) return 0;
+        return i <= 2 ? 1 : 2;
+    });
+    for (Connectivity c : {Connectivity::Six, Connectivity::TwentySix}) {
+        const DigitalSurface complex = extract_digital_surface(labels, c);
+        const std::vector<char> turn = junction_turn_vertices(complex, complex_edges(complex));
+        std::set<std::array<std::int64_t, 3>> turns, corners;
+        std::int64_t low = INT64_MAX, high = INT64_MIN;
+        for (std::int32_t v = 0; v < complex.vertex_count(); ++v) {
+            if (turn[std::size_t(v)]) turns.insert(pointel(complex, v));
+            low = std::min<std::int64_t>(low, complex.vertex_pointels(v, 1));
+            high = std::max<std::int64_t>(high, complex.vertex_pointels(v, 1));
+        }
+        std::int64_t interface_x = -1;
+        for (std::int64_t f = 0; f < complex.face_count(); ++f)
+            if (complex.face_labels[std::size_t(f)].outer != 0)
+                interface_x = complex.vertex_pointels(complex.quads(f, 0), 0);
+        ASSERT_GE(interface_x, 0);
+        for (const std::int64_t y : {low, high})
+            for (const std::int64_t z : {low, high}) corners.insert({interface_x, y, z});  // the boxes span y and z alike
+        EXPECT_EQ(turns, corners);
+        // One label: no junction, no turn.
+        const DigitalSurface binary = extract_digital_surface(test::indicator(labels, 1), c);
+        const std::vector<char> none = junction_turn_vertices(binary, complex_edges(binary));
+        EXPECT_EQ(std::count(none.begin(), none.end(), 1), 0);
     }
 }
 

@@ -41,6 +41,13 @@ struct Junctions {
 
 Junctions find_junctions(const DigitalSurface& surface, const ComplexEdges& edges);
 
+/// 1 for the vertices at the inner corner of a turn of a junction curve: corner k of a face whose
+/// two edges at k are both junction edges. The face's other three corners lie on the curve too
+/// (j₁ j₂ j₃ and one sheet vertex); once the curve is smoothed, j₂ lies near the chord j₁j₃ and the
+/// corner triangle j₁j₂j₃ is a sliver between the curve and its staircase, which folds when j₂
+/// ends a little on the inner side (docs/multi-label.md, "Validity"). None on a binary volume.
+std::vector<char> junction_turn_vertices(const DigitalSurface& surface, const ComplexEdges& edges);
+
 /// Links of the fairness term (eq. 11–14) on the complex, one neighbour per edge:
 ///  * a vertex inside one interface: every edge (for a manifold complex, e.g. any binary
 ///    volume, exactly vertex_links(quads), in the same order);

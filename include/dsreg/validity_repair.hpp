@@ -30,6 +30,10 @@
 //    held (the rows of R and b of eq. 22 plus the terms above, each connected part of the
 //    window solved on its own: small parts by sparse Cholesky, large ones by multigrid CG from
 //    the current positions, the box QP with `clamp_half_width`).
+//    On a label complex, a vertex at the inner corner of a turn of a junction curve
+//    (junction_turn_vertices, label_surface.hpp) is strengthened alone, its rings not graded: its
+//    fold is a sliver between the smoothed curve and its staircase, which a small move of that
+//    vertex alone undoes (grading spread the repair over most of a packed label map).
 //    Rings are taken across every edge of the mesh (on a label complex, from a junction vertex
 //    into the sheets that meet there, which the junction-aware fairness links leave out).
 //  * A face whose u points into the object or nearly along the face (u·n_s < `field_margin`, n_s
@@ -79,6 +83,9 @@ struct ValidityRepairOptions {
     double fairness_step = 10;
     double alpha_grade = 3;    ///< the rings around a strengthened vertex get its factor / this per ring
     int grade_rings = 2;       ///< rings graded so
+    /// Label complexes: grade the rings of the junction turns' vertices too (false: they are
+    /// strengthened alone, see above; true was the behaviour until 2026-12-04, kept for comparison).
+    bool grade_junction_turns = false;
     int region_rings = 2;      ///< the region U: the strengthened vertices and this many rings (≥ grade_rings)
     int window_rings = 4;      ///< each round re-solves the region within this many rings of them
     double split_offset = 0.1;  ///< voxels: the targets of the copies of a split pointel move apart

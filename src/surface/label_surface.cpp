@@ -73,6 +73,17 @@ Junctions find_junctions(const DigitalSurface& surface, const ComplexEdges& edge
     return junctions;
 }
 
+std::vector<char> junction_turn_vertices(const DigitalSurface& surface, const ComplexEdges& edges) {
+    std::vector<char> turn(static_cast<std::size_t>(surface.vertex_count()), 0);
+    const auto junction_edge = [&](std::int64_t f, int e) {
+        return edges.junction[std::size_t(edges.of_face_edge[std::size_t(4 * f + e)])] != 0;
+    };
+    for (std::int64_t f = 0; f < surface.face_count(); ++f)
+        for (int k = 0; k < 4; ++k)  // face edge k joins corners k and k + 1
+            if (junction_edge(f, k) && junction_edge(f, (k + 3) % 4)) turn[std::size_t(surface.quads(f, k))] = 1;
+    return turn;
+}
+
 VertexLinks fairness_links(const DigitalSurface& surface) {
     // Without the faces' labels and surfels (a welded block-wise surface, always binary) the
     // surface is a closed manifold: its links are the quad links.

@@ -142,6 +142,10 @@ public:
           local_(std::size_t(surface.vertex_count()), -1), mark_(std::size_t(surface.vertex_count()), 0),
           rows_(surface.quads, links_, input_field_, weights, surface.vertex_count()) {
         for (int t = 0; t < omp_get_max_threads(); ++t) row_scratch_.emplace_back(surface.vertex_count());
+        // A binary surface (labels {0, 1}) has no junction.
+        if (!options.grade_junction_turns && surface.label_count() > 2 &&
+            surface.face_labels.size() == std::size_t(surface.face_count()))
+            junction_turn_ = junction_turn_vertices(surface, complex_edges(surface));
         faces_of_vertex_.assign(std::size_t(surface.vertex_count()), {});
         for (std::int64_t f = 0; f < surface.face_count(); ++f)
             for (int k = 0; k < 4; ++k) faces_of_vertex_[std::size_t(surface.quads(f, k))].push_back(std::int32_t(f));
@@ -318,7 +322,7 @@ private:
         }
         std::vector<std::int32_t> frontier;
         for (const std::int32_t v : invalid)
-            if (factor_[std::size_t(v)] > 1) frontier.push_back(v);
+            if (factor_[std::size_t(v)] > 1 && !junction_turn(v)) frontier.push_back(v);
         for (int ring = 0; ring < o_.grade_rings; ++ring) {
             std::vector<std::int32_t> next;
             for (const std::int32_t v : frontier)
@@ -336,6 +340,9 @@ private:
         changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
         return changed;
     }
+
+    /// Whether v is at the inner corner of a turn of a junction curve (strengthened alone).
+    bool junction_turn(std::int32_t v) const { return !junction_turn_.empty() && junction_turn_[std::size_t(v)]; }
 
     /// Whether a fold at v raises its fairness this round rather than its data term (not where
     /// the fairness weight is 0: nothing to raise).
@@ -660,6 +667,7 @@ private:
     std::vector<int> fair_steps_;             ///< times n_i was raised
     std::vector<std::int32_t> fair_vertices_;  ///< the i with n_i > 1, in the order they were raised
     std::vector<char> held_;
+    std::vector<char> junction_turn_;  ///< junction_turn_vertices, or empty (binary, grade_junction_turns)
     std::vector<char> in_region_;
     std::vector<char> corrected_;      ///< faces whose u was replaced
     /// Vertices that moved, changed weight or hold, joined the region or touch a face whose field
