@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "dsreg/adaptive_normals.hpp"
 #include "dsreg/digital_surface.hpp"
@@ -54,6 +55,43 @@ TEST(LocalReach, PlateReachIsHalfItsThicknessRoundedUp) {
             EXPECT_DOUBLE_EQ(reach.outer[f], 30.0);
         }
     }
+}
+
+TEST(LocalReach, LabelDistancesEqualTheBruteForceOnes) {
+    // Random blocks of four labels and the background, anisotropic voxels: on every labelled
+    // voxel the map holds the distance to the nearest voxel of another label, the outside of the
+    // grid counting as one (a layer of voxels around it), to one stored step.
+    std::mt19937 random(7);
+    std::uniform_int_distribution<int> pick(0, 4);
+    std::vector<int> block_label(7 * 6 * 5);
+    for (int& l : block_label) l = pick(random);
+    LabelVolume labels = test::make_labels({14, 12, 10}, [&](std::int64_t i, std::int64_t j, std::int64_t k) -> std::int64_t {
+        return block_label[std::size_t(i / 2 + 7 * (j / 2 + 6 * (k / 2)))];
+    });
+    labels.grid.spacing = Eigen::Vector3d(1.0, 0.8, 1.3);
+    const VoxelLabels volume(labels);
+    const ReachMaps maps = reach_maps(volume, 6.0);
+    const Index3& d = labels.grid.dims;
+    const Eigen::Vector3d& s = labels.grid.spacing;
+    std::int64_t checked = 0;
+    for (std::int64_t k = 0; k < d[2]; ++k)
+        for (std::int64_t j = 0; j < d[1]; ++j)
+            for (std::int64_t i = 0; i < d[0]; ++i) {
+                const std::uint32_t l = volume.at(i, j, k);
+                if (l == 0) continue;
+                double best = INFINITY;
+                for (std::int64_t z = -1; z <= d[2]; ++z)
+                    for (std::int64_t y = -1; y <= d[1]; ++y)
+                        for (std::int64_t x = -1; x <= d[0]; ++x) {
+                            const bool outside = x < 0 || y < 0 || z < 0 || x >= d[0] || y >= d[1] || z >= d[2];
+                            if (!outside && volume.at(x, y, z) == l) continue;
+                            best = std::min(best, Eigen::Vector3d(double(x - i) * s.x(), double(y - j) * s.y(), double(z - k) * s.z()).norm());
+                        }
+                EXPECT_NEAR(maps.at(i + maps.padding, j + maps.padding, k + maps.padding), best, maps.unit)
+                    << "voxel " << i << " " << j << " " << k;
+                ++checked;
+            }
+    EXPECT_GT(checked, 1000);
 }
 
 TEST(LocalReach, RingsForgetAOneVoxelBumpButNotAThinPlate) {

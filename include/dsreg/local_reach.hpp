@@ -41,7 +41,7 @@ struct ReachMaps {
 
 /// The maps for reaches up to `cap` (physical units): the distance transform of the labelled
 /// voxels on the grown grid (4 bytes per voxel while it runs), then that of each label on its
-/// bounding box grown by the cap. Throws dsreg::Error for a cap that is
+/// bounding box grown by one voxel (enough for the exact distances). Throws dsreg::Error for a cap that is
 /// not positive and finite, or so large that the distances would not fit (about 4000 voxels).
 ReachMaps reach_maps(const VoxelLabels& volume, double cap);
 

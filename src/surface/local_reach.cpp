@@ -89,13 +89,16 @@ std::vector<std::array<Index3, 2>> label_boxes(const VoxelLabels& volume) {
 }
 
 /// D to the other labels on the voxels of label l ≥ 1: the distance transform of its indicator
-/// on its bounding box grown by the padding (clipped to the grid; beyond it, no voxel of l).
+/// on its bounding box grown by one voxel (clipped to the grid, whose outside counts as another
+/// label). One voxel is enough, and gives the distances of the whole grid exactly: the nearest
+/// voxel y of another label to a voxel x of l, clamped onto the grown box, is a voxel outside
+/// the bounding box (so of another label) no farther from x.
 void fill_label_distances(const VoxelLabels& volume, std::uint32_t l, const std::array<Index3, 2>& box, ReachMaps& maps) {
     BinaryVolume crop;
     Index3 lo, hi;
     for (std::size_t a = 0; a < 3; ++a) {
-        lo[a] = std::max<std::int64_t>(0, box[0][a] - maps.padding);
-        hi[a] = std::min<std::int64_t>(volume.grid().dims[a] - 1, box[1][a] + maps.padding);
+        lo[a] = std::max<std::int64_t>(0, box[0][a] - 1);
+        hi[a] = std::min<std::int64_t>(volume.grid().dims[a] - 1, box[1][a] + 1);
         crop.grid.dims[a] = hi[a] - lo[a] + 1;
     }
     crop.grid.spacing = volume.grid().spacing;
