@@ -58,6 +58,9 @@ std::vector<char> junction_turn_vertices(const DigitalSurface& surface, const Co
 ///    data place it.
 /// A surface without face labels or surfels (a welded block-wise surface) gets vertex_links(quads).
 VertexLinks fairness_links(const DigitalSurface& surface);
+/// The same for a surface with face labels and surfels, from its edges (complex_edges), for a
+/// caller that needs them too.
+VertexLinks fairness_links(const DigitalSurface& surface, const ComplexEdges& edges);
 
 /// The closed surface of one label, made of faces and vertices of the complex, oriented outward
 /// of the label. It is the label's own digital surface: its faces are those of the label's

@@ -90,7 +90,10 @@ VertexLinks fairness_links(const DigitalSurface& surface) {
     const std::size_t faces = std::size_t(surface.face_count());
     if (surface.face_labels.size() != faces || surface.surfels.size() != faces)
         return vertex_links(surface.quads, surface.vertex_count());
-    const ComplexEdges edges = complex_edges(surface);
+    return fairness_links(surface, complex_edges(surface));
+}
+
+VertexLinks fairness_links(const DigitalSurface& surface, const ComplexEdges& edges) {
     const Junctions junctions = find_junctions(surface, edges);
     const std::int64_t m = surface.face_count(), n = surface.vertex_count();
     // Each edge gives each of its ends one link entry, at the first face edge leaving that end

@@ -130,22 +130,20 @@ std::vector<std::int32_t> rings_around(const VertexLinks& links, const std::vect
 /// which the local solves add to the rows they solve for.
 class Repair {
 public:
-    Repair(const DigitalSurface& surface, const VertexLinks& links, const PointMatrix& normals,
-           const RegularizationWeights& weights, const PointMatrix& positions, const ValidityRepairOptions& options)
+    Repair(const DigitalSurface& surface, const VertexLinks& links, std::vector<char> junction_turns,
+           const PointMatrix& normals, const RegularizationWeights& weights, const PointMatrix& positions,
+           const ValidityRepairOptions& options)
         : surface_(surface), weights_(weights), o_(options), links_(links),
           neighbours_(edge_neighbours(surface.quads, surface.vertex_count())),
           input_field_(normals), field_(normals), targets_(repair_targets(surface, options.split_offset)),
           x_(flatten_points(positions)), factor_(std::size_t(surface.vertex_count()), 1.0),
           fair_factor_(std::size_t(surface.vertex_count()), 1.0), fair_steps_(std::size_t(surface.vertex_count()), 0),
-          held_(std::size_t(surface.vertex_count()), 0), in_region_(std::size_t(surface.vertex_count()), 0),
+          held_(std::size_t(surface.vertex_count()), 0), junction_turn_(std::move(junction_turns)),
+          in_region_(std::size_t(surface.vertex_count()), 0),
           corrected_(std::size_t(surface.face_count()), 0), changed_(std::size_t(surface.vertex_count()), 1),
           local_(std::size_t(surface.vertex_count()), -1), mark_(std::size_t(surface.vertex_count()), 0),
           rows_(surface.quads, links_, input_field_, weights, surface.vertex_count()) {
         for (int t = 0; t < omp_get_max_threads(); ++t) row_scratch_.emplace_back(surface.vertex_count());
-        // A binary surface (labels {0, 1}) has no junction.
-        if (!options.grade_junction_turns && surface.label_count() > 2 &&
-            surface.face_labels.size() == std::size_t(surface.face_count()))
-            junction_turn_ = junction_turn_vertices(surface, complex_edges(surface));
         faces_of_vertex_.assign(std::size_t(surface.vertex_count()), {});
         for (std::int64_t f = 0; f < surface.face_count(); ++f)
             for (int k = 0; k < 4; ++k) faces_of_vertex_[std::size_t(surface.quads(f, k))].push_back(std::int32_t(f));
@@ -730,7 +728,12 @@ ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointM
     result.normals = normals;
     result.alpha_factors = Eigen::VectorXd::Ones(surface.vertex_count());
     result.fairness_factors = Eigen::VectorXd::Ones(surface.vertex_count());
-    const VertexLinks links = fairness_links(surface);
+    // A label complex (a binary surface, labels {0, 1}, has no junction): its edges give both
+    // the fairness links and the junction turns.
+    const bool complex = surface.label_count() > 2 && surface.face_labels.size() == std::size_t(surface.face_count()) &&
+                         surface.surfels.size() == std::size_t(surface.face_count());
+    const ComplexEdges edges = complex ? complex_edges(surface) : ComplexEdges{};
+    const VertexLinks links = complex ? fairness_links(surface, edges) : fairness_links(surface);
     report.energy_before = regularization_energy(positions, surface.vertices, surface.quads, links, normals, weights);
     report.energy_after = report.energy_before;
     report.check_seconds = report.before.seconds;
@@ -738,7 +741,9 @@ ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointM
 
     // Rounds on windows around what is invalid, then one exact solve of the whole region; again
     // if that solve undid the repair somewhere.
-    Repair repair(surface, links, normals, weights, positions, options);
+    Repair repair(surface, links,
+                  complex && !options.grade_junction_turns ? junction_turn_vertices(surface, edges) : std::vector<char>(),
+                  normals, weights, positions, options);
     MeshValidity& validity = report.after;
     const auto update = [&](const std::vector<std::int32_t>& moved, const std::vector<std::int32_t>& refield) {
         tracker.update(repair.positions(), moved, refield, repair.field());
