@@ -7,6 +7,7 @@
 #include <random>
 
 #include "dsreg/distance_transform.hpp"
+#include "dsreg/error.hpp"
 #include "test_support.hpp"
 
 namespace dsreg {
@@ -48,6 +49,30 @@ TEST(DistanceTransform, MatchesTheDefinitionOnRandomAnisotropicVolumes) {
                     }
         }
     }
+}
+
+TEST(DistanceTransform, CappedIsTheExactDistanceClampedAtTheCap) {
+    // Wider than the 16 lines the passes along y and z take together (two tiles and a partial
+    // one), sparse targets so that many distances exceed the cap.
+    std::mt19937 random(11);
+    std::bernoulli_distribution coin(0.02);
+    BinaryVolume v = test::make_volume({35, 20, 9}, [&](double, double, double) { return coin(random); });
+    v.grid.spacing = Eigen::Vector3d(0.8, 1.0, 1.9);
+    const double cap = 3.5;
+    const std::vector<float> exact = euclidean_distance_transform(v, DistanceTarget::object);
+    const std::vector<float> capped = euclidean_distance_transform(v, DistanceTarget::object, cap);
+    std::int64_t beyond = 0;
+    for (std::int64_t k = 0; k < 9; ++k)
+        for (std::int64_t j = 0; j < 20; ++j)
+            for (std::int64_t i = 0; i < 35; ++i) {
+                const std::size_t at = std::size_t(v.grid.linear_index(i, j, k));
+                const double expected = brute_force_distance(v, {i, j, k}, DistanceTarget::object);
+                EXPECT_NEAR(exact[at], expected, 1e-5 * (1 + expected)) << "voxel " << i << " " << j << " " << k;
+                EXPECT_NEAR(capped[at], std::min(expected, cap), 1e-5 * (1 + cap)) << "voxel " << i << " " << j << " " << k;
+                beyond += expected > cap ? 1 : 0;
+            }
+    EXPECT_GT(beyond, 100);
+    EXPECT_THROW(euclidean_distance_transform(v, DistanceTarget::object, 0.0), Error);
 }
 
 TEST(DistanceTransform, BallCentreIsTheNearestLatticePointOutsideAway) {

@@ -6,6 +6,7 @@
 // from the background.
 #pragma once
 
+#include <limits>
 #include <vector>
 
 #include "dsreg/volume.hpp"
@@ -23,13 +24,16 @@ enum class DistanceTarget {
 /// The exact Euclidean distance transform, one value per voxel (x fastest, as the mask):
 /// three passes of the lower envelope of parabolas (Felzenszwalb and Huttenlocher, "Distance
 /// transforms of sampled functions", 2012), one along each axis, each weighted by the axis'
-/// spacing. O(voxels), 4 bytes per voxel plus one line of work space per thread.
-std::vector<float> euclidean_distance_transform(const BinaryVolume& volume, DistanceTarget target);
+/// spacing. O(voxels), 4 bytes per voxel plus one line of work space per thread. With a finite
+/// `cap` (physical units, positive), distances above it come out as the cap, which is faster when
+/// most of the volume is farther than the cap from its targets (fewer sites per line).
+std::vector<float> euclidean_distance_transform(const BinaryVolume& volume, DistanceTarget target,
+                                                double cap = std::numeric_limits<double>::infinity());
 
 /// The same on the grid grown by `padding` voxels on every side (background there), so that
 /// distances are also known up to `padding` voxels outside the volume: voxel (i,j,k) of the
 /// volume is voxel (i,j,k) + padding of `grid`. 4 bytes per voxel of the grown grid. Throws
-/// dsreg::Error for a negative padding.
+/// dsreg::Error for a negative padding or a cap that is not positive.
 struct PaddedDistanceMap {
     VoxelGrid grid;                ///< the grown grid (same spacing; origin moved out by the padding)
     std::int64_t padding = 0;
@@ -39,6 +43,7 @@ struct PaddedDistanceMap {
         return distance[std::size_t(grid.linear_index(i, j, k))];
     }
 };
-PaddedDistanceMap padded_distance_transform(const BinaryVolume& volume, DistanceTarget target, std::int64_t padding);
+PaddedDistanceMap padded_distance_transform(const BinaryVolume& volume, DistanceTarget target, std::int64_t padding,
+                                            double cap = std::numeric_limits<double>::infinity());
 
 }  // namespace dsreg

@@ -26,7 +26,9 @@
 namespace dsreg {
 
 /// D_bg on the object voxels and D_obj on the background voxels, on the grid grown by `padding`
-/// voxels (volume voxel (i,j,k) is (i,j,k) + padding), in units of `unit`.
+/// voxels (volume voxel (i,j,k) is (i,j,k) + padding), in units of `unit`. Distances above
+/// 2·(cap + the largest spacing) are stored as that value (reach_maps): every length the reaches
+/// and thicknesses compare with them is shorter, so they come out as with the exact distances.
 struct ReachMaps {
     VoxelGrid grid;  ///< the grown grid
     std::int64_t padding = 0;

@@ -70,21 +70,36 @@ std::uint16_t stored_distance(const ReachMaps& maps, float distance) {
 }
 
 /// Bounding boxes [lo, hi] of the voxels of every label index (index 0 unused); hi < lo where absent.
-std::vector<std::array<Index3, 2>> label_boxes(const VoxelLabels& volume) {
+using LabelBoxes = std::vector<std::array<Index3, 2>>;
+
+void grow_box(LabelBoxes& boxes, std::uint32_t l, const Index3& lo, const Index3& hi, const Index3& dims) {
+    if (l >= boxes.size()) boxes.resize(l + 1, {dims, Index3{-1, -1, -1}});
+    for (std::size_t a = 0; a < 3; ++a) {
+        boxes[l][0][a] = std::min(boxes[l][0][a], lo[a]);
+        boxes[l][1][a] = std::max(boxes[l][1][a], hi[a]);
+    }
+}
+
+LabelBoxes label_boxes(const VoxelLabels& volume) {
     const Index3& d = volume.grid().dims;
-    std::vector<std::array<Index3, 2>> boxes;
+    std::vector<LabelBoxes> per_slice(static_cast<std::size_t>(d[2]));  // one slice k each, merged below
+#pragma omp parallel for schedule(static)
     for (std::int64_t k = 0; k < d[2]; ++k)
-        for (std::int64_t j = 0; j < d[1]; ++j)
+        for (std::int64_t j = 0; j < d[1]; ++j) {
+            const std::int64_t row = volume.grid().linear_index(0, j, k);
             for (std::int64_t i = 0; i < d[0]; ++i) {
-                const std::uint32_t l = volume.at_linear(volume.grid().linear_index(i, j, k));
+                const std::uint32_t l = volume.at_linear(row + i);
                 if (l == 0) continue;
-                if (l >= boxes.size()) boxes.resize(l + 1, {Index3{d[0], d[1], d[2]}, Index3{-1, -1, -1}});
-                for (int a = 0; a < 3; ++a) {
-                    const std::int64_t x = a == 0 ? i : a == 1 ? j : k;
-                    boxes[l][0][std::size_t(a)] = std::min(boxes[l][0][std::size_t(a)], x);
-                    boxes[l][1][std::size_t(a)] = std::max(boxes[l][1][std::size_t(a)], x);
-                }
+                std::int64_t last = i;  // the run of label l from i
+                while (last + 1 < d[0] && volume.at_linear(row + last + 1) == l) ++last;
+                grow_box(per_slice[std::size_t(k)], l, {i, j, k}, {last, j, k}, d);
+                i = last;
             }
+        }
+    LabelBoxes boxes;
+    for (const LabelBoxes& slice : per_slice)
+        for (std::uint32_t l = 1; l < slice.size(); ++l)
+            if (slice[l][1][0] >= 0) grow_box(boxes, l, slice[l][0], slice[l][1], d);
     return boxes;
 }
 
@@ -93,7 +108,8 @@ std::vector<std::array<Index3, 2>> label_boxes(const VoxelLabels& volume) {
 /// label). One voxel is enough, and gives the distances of the whole grid exactly: the nearest
 /// voxel y of another label to a voxel x of l, clamped onto the grown box, is a voxel outside
 /// the bounding box (so of another label) no farther from x.
-void fill_label_distances(const VoxelLabels& volume, std::uint32_t l, const std::array<Index3, 2>& box, ReachMaps& maps) {
+void fill_label_distances(const VoxelLabels& volume, std::uint32_t l, const std::array<Index3, 2>& box, double saturation,
+                          ReachMaps& maps) {
     BinaryVolume crop;
     Index3 lo, hi;
     for (std::size_t a = 0; a < 3; ++a) {
@@ -103,11 +119,15 @@ void fill_label_distances(const VoxelLabels& volume, std::uint32_t l, const std:
     }
     crop.grid.spacing = volume.grid().spacing;
     crop.mask.resize(std::size_t(crop.grid.voxel_count()));
+#pragma omp parallel for schedule(static)
     for (std::int64_t k = 0; k < crop.grid.dims[2]; ++k)
-        for (std::int64_t j = 0; j < crop.grid.dims[1]; ++j)
-            for (std::int64_t i = 0; i < crop.grid.dims[0]; ++i)
-                crop.mask[std::size_t(crop.grid.linear_index(i, j, k))] = volume.at(lo[0] + i, lo[1] + j, lo[2] + k) == l;
-    const std::vector<float> distance = euclidean_distance_transform(crop, DistanceTarget::background);
+        for (std::int64_t j = 0; j < crop.grid.dims[1]; ++j) {
+            const std::int64_t from = volume.grid().linear_index(lo[0], lo[1] + j, lo[2] + k);
+            std::uint8_t* to = crop.mask.data() + crop.grid.linear_index(0, j, k);
+            for (std::int64_t i = 0; i < crop.grid.dims[0]; ++i) to[i] = volume.at_linear(from + i) == l;
+        }
+    const std::vector<float> distance = euclidean_distance_transform(crop, DistanceTarget::background, saturation);
+#pragma omp parallel for schedule(static)
     for (std::int64_t k = 0; k < crop.grid.dims[2]; ++k)
         for (std::int64_t j = 0; j < crop.grid.dims[1]; ++j)
             for (std::int64_t i = 0; i < crop.grid.dims[0]; ++i) {
@@ -130,20 +150,28 @@ ReachMaps reach_maps(const VoxelLabels& volume, double cap) {
         throw Error("reach maps: a cap of " + std::to_string(cap) + " spans too many voxels");
     maps.cap = cap;
     maps.padding = std::int64_t(std::ceil(cap / grid.spacing.minCoeff())) + 1;
+    // Every length compared with a distance of the maps is below √3·(cap + one voxel) (the corners
+    // of half_local_thickness's box), so distances saturated above this compare the same.
+    const double saturation = 2.0 * (cap + grid.spacing.maxCoeff());
     {
         // The background (label 0, the padding included): D to the nearest labelled voxel.
         BinaryVolume labelled{grid, std::vector<std::uint8_t>(std::size_t(grid.voxel_count()))};
+#pragma omp parallel for schedule(static)
         for (std::int64_t v = 0; v < grid.voxel_count(); ++v) labelled.mask[std::size_t(v)] = volume.at_linear(v) != 0;
-        const PaddedDistanceMap map = padded_distance_transform(labelled, DistanceTarget::object, maps.padding);
+        const PaddedDistanceMap map = padded_distance_transform(labelled, DistanceTarget::object, maps.padding, saturation);
         maps.grid = map.grid;
-        maps.distance.assign(map.distance.size(), 0);
-        for (std::size_t v = 0; v < map.distance.size(); ++v)
-            if (map.distance[v] > 0) maps.distance[v] = stored_distance(maps, map.distance[v]);
+        maps.distance.resize(map.distance.size());
+        const auto voxels = static_cast<std::int64_t>(map.distance.size());
+#pragma omp parallel for schedule(static)
+        for (std::int64_t v = 0; v < voxels; ++v) {
+            const float distance = map.distance[std::size_t(v)];
+            maps.distance[std::size_t(v)] = distance > 0 ? stored_distance(maps, distance) : 0;
+        }
     }
     // Every other label: D to the nearest voxel of another label (the background included).
     const std::vector<std::array<Index3, 2>> boxes = label_boxes(volume);
     for (std::uint32_t l = 1; l < boxes.size(); ++l)
-        if (boxes[l][1][0] >= 0) fill_label_distances(volume, l, boxes[l], maps);
+        if (boxes[l][1][0] >= 0) fill_label_distances(volume, l, boxes[l], saturation, maps);
     return maps;
 }
 

@@ -5,7 +5,9 @@
 // border) enter every pass as one extra site with value 0 at index −1 and at index n.
 #include "dsreg/distance_transform.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "dsreg/error.hpp"
@@ -16,12 +18,13 @@ namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
-/// The squared distances along one line: out[p] = min_q (in[q] + w·(p − q)²) over the n samples
-/// of `in` and, with `border_sites`, over q = −1 and q = n with value 0. Work space: v, z.
-void lower_envelope(const double* in, double* out, std::int64_t n, double w, bool border_sites,
+/// The squared distances along one line: out[p] = min(limit, min_q (in[q] + w·(p − q)²)) over the
+/// n samples of `in` and, with `border_sites`, over q = −1 and q = n with value 0. Work space:
+/// site, value, boundary.
+void lower_envelope(const double* in, double* out, std::int64_t n, double w, bool border_sites, double limit,
                     std::vector<double>& site, std::vector<double>& value, std::vector<double>& boundary) {
-    // Sites are indices q with finite in[q] (plus the two border sites); boundary[k] is where
-    // parabola k starts to be the lowest.
+    // Sites are indices q with in[q] < limit (plus the two border sites): one at or above the
+    // limit puts no value below it anywhere. boundary[k] is where parabola k starts to be the lowest.
     std::int64_t k = -1;
     const auto intersection = [&](double q, double fq, std::int64_t j) {
         return ((fq + w * q * q) - (value[std::size_t(j)] + w * site[std::size_t(j)] * site[std::size_t(j)])) /
@@ -41,53 +44,73 @@ void lower_envelope(const double* in, double* out, std::int64_t n, double w, boo
     };
     if (border_sites) push(-1.0, 0.0);
     for (std::int64_t q = 0; q < n; ++q)
-        if (std::isfinite(in[q])) push(double(q), in[q]);
+        if (in[q] < limit) push(double(q), in[q]);
     if (border_sites) push(double(n), 0.0);
     if (k < 0) {
-        for (std::int64_t p = 0; p < n; ++p) out[p] = kInfinity;
+        for (std::int64_t p = 0; p < n; ++p) out[p] = limit;
         return;
     }
     std::int64_t j = 0;
     for (std::int64_t p = 0; p < n; ++p) {
         while (j < k && boundary[std::size_t(j + 1)] < double(p)) ++j;
         const double d = double(p) - site[std::size_t(j)];
-        out[p] = value[std::size_t(j)] + w * d * d;
+        out[p] = std::min(limit, value[std::size_t(j)] + w * d * d);
     }
 }
 
-/// One pass along `axis` over every line of the grid, in place on `squared`.
-void pass_along(std::vector<float>& squared, const VoxelGrid& grid, int axis, bool border_sites) {
+/// Lines gathered together in a pass along y or z: consecutive lines along x, so that every
+/// cache line read from the volume serves them all (one line at a stride of nx or nx·ny floats
+/// would use 4 bytes of each 64-byte cache line).
+constexpr std::int64_t kLinesPerTile = 16;
+
+/// One pass along `axis` over every line of the grid, in place on `squared`. Along y and z, the
+/// lines are taken in tiles of kLinesPerTile neighbours along x, copied to contiguous work space.
+void pass_along(std::vector<float>& squared, const VoxelGrid& grid, int axis, bool border_sites, double limit) {
     const Index3& d = grid.dims;
     const std::int64_t n = d[std::size_t(axis)];
     const std::int64_t stride = axis == 0 ? 1 : axis == 1 ? d[0] : d[0] * d[1];
-    const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;  // the two other axes
-    const std::int64_t lines = d[std::size_t(a1)] * d[std::size_t(a2)];
+    const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;  // the two other axes; a1 = x unless axis = x
+    const std::int64_t width = axis == 0 ? 1 : kLinesPerTile;  // lines per tile, neighbours along a1
+    const std::int64_t tiles_across = (d[std::size_t(a1)] + width - 1) / width;
+    const std::int64_t tiles = tiles_across * d[std::size_t(a2)];
     const double w = grid.spacing[axis] * grid.spacing[axis];
 #pragma omp parallel
     {
         const auto length = static_cast<std::size_t>(n);
-        std::vector<double> in(length), out(length), site(length + 2), value(length + 2), boundary(length + 2);
+        std::vector<double> in(length * std::size_t(width)), out(length), site(length + 2), value(length + 2),
+            boundary(length + 2);
 #pragma omp for schedule(static)
-        for (std::int64_t line = 0; line < lines; ++line) {
+        for (std::int64_t tile = 0; tile < tiles; ++tile) {
             Index3 start{0, 0, 0};
-            start[std::size_t(a1)] = line % d[std::size_t(a1)];
-            start[std::size_t(a2)] = line / d[std::size_t(a1)];
+            start[std::size_t(a1)] = (tile % tiles_across) * width;
+            start[std::size_t(a2)] = tile / tiles_across;
+            const std::int64_t lines = std::min(width, d[std::size_t(a1)] - start[std::size_t(a1)]);
             const std::int64_t first = grid.linear_index(start[0], start[1], start[2]);
-            for (std::int64_t p = 0; p < n; ++p) in[std::size_t(p)] = squared[std::size_t(first + p * stride)];
-            lower_envelope(in.data(), out.data(), n, w, border_sites, site, value, boundary);
-            for (std::int64_t p = 0; p < n; ++p) squared[std::size_t(first + p * stride)] = float(out[std::size_t(p)]);
+            const std::int64_t line_step = axis == 0 ? 0 : 1;  // along x when the tile has several lines
+            for (std::int64_t p = 0; p < n; ++p)
+                for (std::int64_t l = 0; l < lines; ++l)
+                    in[std::size_t(l * n + p)] = squared[std::size_t(first + l * line_step + p * stride)];
+            for (std::int64_t l = 0; l < lines; ++l) {
+                lower_envelope(in.data() + l * n, out.data(), n, w, border_sites, limit, site, value, boundary);
+                for (std::int64_t p = 0; p < n; ++p) in[std::size_t(l * n + p)] = out[std::size_t(p)];
+            }
+            for (std::int64_t p = 0; p < n; ++p)
+                for (std::int64_t l = 0; l < lines; ++l)
+                    squared[std::size_t(first + l * line_step + p * stride)] = float(in[std::size_t(l * n + p)]);
         }
     }
 }
 
 }  // namespace
 
-std::vector<float> euclidean_distance_transform(const BinaryVolume& volume, DistanceTarget target) {
-    return padded_distance_transform(volume, target, 0).distance;
+std::vector<float> euclidean_distance_transform(const BinaryVolume& volume, DistanceTarget target, double cap) {
+    return padded_distance_transform(volume, target, 0, cap).distance;
 }
 
-PaddedDistanceMap padded_distance_transform(const BinaryVolume& volume, DistanceTarget target, std::int64_t padding) {
+PaddedDistanceMap padded_distance_transform(const BinaryVolume& volume, DistanceTarget target, std::int64_t padding,
+                                            double cap) {
     if (padding < 0) throw Error("padded_distance_transform: the padding must not be negative");
+    if (!(cap > 0)) throw Error("padded_distance_transform: the cap must be positive");
     const bool to_background = target == DistanceTarget::background;
     PaddedDistanceMap map;
     map.padding = padding;
@@ -96,18 +119,23 @@ PaddedDistanceMap padded_distance_transform(const BinaryVolume& volume, Distance
     map.grid.origin -= double(padding) * volume.grid.spacing;
     // Squared distances in place (float: exact for integer squared distances below 2^24),
     // square roots at the end. The padding is background.
-    const float target_value = 0.0f, other = float(kInfinity);
+    // Capping commutes with every pass (min(cap², f) enveloped is min(cap², envelope of f)), so
+    // the cap enters as the value of non-targets, and sites at or above it drop out of the lines.
+    const float target_value = 0.0f, other = float(cap * cap);
+    const double limit = double(other);
     map.distance.assign(std::size_t(map.grid.voxel_count()), to_background ? target_value : other);
     const Index3& d = volume.grid.dims;
+#pragma omp parallel for schedule(static)
     for (std::int64_t k = 0; k < d[2]; ++k)
-        for (std::int64_t j = 0; j < d[1]; ++j)
-            for (std::int64_t i = 0; i < d[0]; ++i) {
-                const bool object = volume.mask[std::size_t(volume.grid.linear_index(i, j, k))] != 0;
-                map.distance[std::size_t(map.grid.linear_index(i + padding, j + padding, k + padding))] =
-                    object != to_background ? target_value : other;
-            }
-    for (int axis = 0; axis < 3; ++axis) pass_along(map.distance, map.grid, axis, to_background);
-    for (float& value : map.distance) value = std::sqrt(value);
+        for (std::int64_t j = 0; j < d[1]; ++j) {
+            const std::uint8_t* mask = volume.mask.data() + volume.grid.linear_index(0, j, k);
+            float* row = map.distance.data() + map.grid.linear_index(padding, j + padding, k + padding);
+            for (std::int64_t i = 0; i < d[0]; ++i) row[i] = (mask[i] != 0) != to_background ? target_value : other;
+        }
+    for (int axis = 0; axis < 3; ++axis) pass_along(map.distance, map.grid, axis, to_background, limit);
+    const auto voxels = static_cast<std::int64_t>(map.distance.size());
+#pragma omp parallel for schedule(static)
+    for (std::int64_t v = 0; v < voxels; ++v) map.distance[std::size_t(v)] = std::sqrt(map.distance[std::size_t(v)]);
     return map;
 }
 
