@@ -10,6 +10,7 @@
 
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/implicit_shape.hpp"
+#include "dsreg/local_reach.hpp"
 #include "dsreg/normals.hpp"
 #include "dsreg/regularization.hpp"
 #include "dsreg/volume_io.hpp"
@@ -65,6 +66,15 @@ void BM_GoursatIntegralInvariants(benchmark::State& state) {
     const Case& c = goursat_case(state.range(0) / 100.0);
     for (auto _ : state) benchmark::DoNotOptimize(integral_invariant_normals(c.volume, c.surface, c.radius).data());
     report_size(state, c.surface);
+}
+
+/// The distance maps of the thin-part weights at the pipeline's default cap (a reference reach
+/// of 12 voxels plus one): the object and the background, on the grid grown by the cap.
+void BM_GoursatReachMaps(benchmark::State& state) {
+    const Case& c = goursat_case(state.range(0) / 100.0);
+    const double cap = 13.0 * c.volume.grid.spacing.maxCoeff();
+    for (auto _ : state) benchmark::DoNotOptimize(reach_maps(c.volume, cap).distance.data());
+    state.counters["voxels"] = double(c.volume.grid.voxel_count());
 }
 
 void BM_GoursatAssembly(benchmark::State& state) {
@@ -132,6 +142,7 @@ void BM_BunnyPipeline(benchmark::State& state) {
 BENCHMARK(BM_GoursatDigitize)->Arg(25)->Arg(10)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_GoursatSurface)->Arg(25)->Arg(10)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_GoursatIntegralInvariants)->Arg(25)->Arg(10)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GoursatReachMaps)->Arg(10)->Arg(5)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_GoursatAssembly)->Arg(25)->Arg(10)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_GoursatSolve, cholmod, dsreg::SolverKind::Cholmod)->Arg(25)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_GoursatSolve, cg, dsreg::SolverKind::ConjugateGradient)->Arg(25)->Unit(benchmark::kMillisecond);
