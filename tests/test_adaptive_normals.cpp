@@ -4,6 +4,7 @@
 // against the true normals on thick and on thin shapes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -92,6 +93,42 @@ TEST(LocalReach, LabelDistancesEqualTheBruteForceOnes) {
                 ++checked;
             }
     EXPECT_GT(checked, 1000);
+}
+
+TEST(LocalReach, BinaryMapsEqualThoseOfTheSameObjectAsALabelMap) {
+    // A binary volume takes both of its maps from one two-sided transform; the same object as a
+    // one-label map takes the background's map and then its label's on its bounding box: every
+    // stored distance of the grown grid must agree (thin random blocks, anisotropic voxels, a cap
+    // small enough that many distances saturate).
+    std::mt19937 random(5);
+    std::bernoulli_distribution coin(0.45);
+    std::vector<char> block(12 * 10 * 8);
+    for (char& b : block) b = coin(random) ? 1 : 0;
+    const auto inside = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+        return block[std::size_t(i / 3 + 12 * (j / 3 + 10 * (k / 3)))] != 0;
+    };
+    const Index3 dims{36, 30, 24};
+    BinaryVolume binary = test::make_volume(dims, [](double, double, double) { return false; });
+    for (std::int64_t k = 0; k < dims[2]; ++k)
+        for (std::int64_t j = 0; j < dims[1]; ++j)
+            for (std::int64_t i = 0; i < dims[0]; ++i) binary.mask[std::size_t(binary.grid.linear_index(i, j, k))] = inside(i, j, k);
+    binary.grid.spacing = Eigen::Vector3d(0.9, 1.0, 1.4);
+    LabelVolume labels = test::make_labels(dims, [&](std::int64_t i, std::int64_t j, std::int64_t k) -> std::int64_t {
+        return inside(i, j, k) ? 1 : 0;
+    });
+    labels.grid = binary.grid;
+    const ReachMaps from_binary = reach_maps(VoxelLabels(binary), 2.5);
+    const ReachMaps from_labels = reach_maps(VoxelLabels(labels), 2.5);
+    ASSERT_EQ(from_binary.grid.dims, from_labels.grid.dims);
+    ASSERT_EQ(from_binary.distance.size(), from_labels.distance.size());
+    std::int64_t differing = 0, saturated = 0;
+    const std::uint16_t largest = *std::max_element(from_labels.distance.begin(), from_labels.distance.end());
+    for (std::size_t v = 0; v < from_binary.distance.size(); ++v) {
+        differing += from_binary.distance[v] != from_labels.distance[v] ? 1 : 0;
+        saturated += from_labels.distance[v] == largest ? 1 : 0;
+    }
+    EXPECT_EQ(differing, 0);
+    EXPECT_GT(saturated, 100);  // the cap was reached: the saturation is exercised
 }
 
 TEST(LocalReach, RingsForgetAOneVoxelBumpButNotAThinPlate) {

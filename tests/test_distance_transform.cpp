@@ -37,13 +37,18 @@ TEST(DistanceTransform, MatchesTheDefinitionOnRandomAnisotropicVolumes) {
         std::bernoulli_distribution coin(trial < 2 ? 0.7 : 0.1);
         BinaryVolume v = test::make_volume({9, 7, 6}, [&](double, double, double) { return coin(random); });
         v.grid.spacing = Eigen::Vector3d(1.0, 0.6, 1.7);
-        for (DistanceTarget target : {DistanceTarget::background, DistanceTarget::object}) {
+        for (DistanceTarget target : {DistanceTarget::background, DistanceTarget::object, DistanceTarget::other_kind}) {
             const std::vector<float> d = euclidean_distance_transform(v, target);
             ASSERT_EQ(d.size(), v.mask.size());
             for (std::int64_t k = 0; k < 6; ++k)
                 for (std::int64_t j = 0; j < 7; ++j)
                     for (std::int64_t i = 0; i < 9; ++i) {
-                        const double expected = brute_force_distance(v, {i, j, k}, target);
+                        // other_kind: an object voxel's distance to the background, a background
+                        // voxel's to the object.
+                        const DistanceTarget own = target != DistanceTarget::other_kind ? target
+                                                   : v.inside(i, j, k)                  ? DistanceTarget::background
+                                                                                        : DistanceTarget::object;
+                        const double expected = brute_force_distance(v, {i, j, k}, own);
                         EXPECT_NEAR(d[std::size_t(v.grid.linear_index(i, j, k))], expected, 1e-5 * (1 + expected))
                             << "voxel " << i << " " << j << " " << k;
                     }
@@ -61,6 +66,7 @@ TEST(DistanceTransform, CappedIsTheExactDistanceClampedAtTheCap) {
     const double cap = 3.5;
     const std::vector<float> exact = euclidean_distance_transform(v, DistanceTarget::object);
     const std::vector<float> capped = euclidean_distance_transform(v, DistanceTarget::object, cap);
+    const std::vector<float> both = euclidean_distance_transform(v, DistanceTarget::other_kind, cap);
     std::int64_t beyond = 0;
     for (std::int64_t k = 0; k < 9; ++k)
         for (std::int64_t j = 0; j < 20; ++j)
@@ -69,6 +75,8 @@ TEST(DistanceTransform, CappedIsTheExactDistanceClampedAtTheCap) {
                 const double expected = brute_force_distance(v, {i, j, k}, DistanceTarget::object);
                 EXPECT_NEAR(exact[at], expected, 1e-5 * (1 + expected)) << "voxel " << i << " " << j << " " << k;
                 EXPECT_NEAR(capped[at], std::min(expected, cap), 1e-5 * (1 + cap)) << "voxel " << i << " " << j << " " << k;
+                const double other = v.inside(i, j, k) ? brute_force_distance(v, {i, j, k}, DistanceTarget::background) : expected;
+                EXPECT_NEAR(both[at], std::min(other, cap), 1e-5 * (1 + cap)) << "voxel " << i << " " << j << " " << k;
                 beyond += expected > cap ? 1 : 0;
             }
     EXPECT_GT(beyond, 100);

@@ -19,6 +19,9 @@ enum class DistanceTarget {
                  ///< (0 on background voxels; outside the grid counts)
     object,      ///< distance to the nearest object voxel centre (0 on object voxels; +inf for
                  ///< every voxel of a volume without object voxels)
+    other_kind,  ///< both in one map: on object voxels the distance to the background, on
+                 ///< background voxels the distance to the object (never 0); the cost of one
+                 ///< transform's memory and about 1.5 times its arithmetic
 };
 
 /// The exact Euclidean distance transform, one value per voxel (x fastest, as the mask):

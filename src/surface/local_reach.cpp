@@ -154,11 +154,13 @@ ReachMaps reach_maps(const VoxelLabels& volume, double cap) {
     // of half_local_thickness's box), so distances saturated above this compare the same.
     const double saturation = 2.0 * (cap + grid.spacing.maxCoeff());
     {
-        // The background (label 0, the padding included): D to the nearest labelled voxel.
+        // The background (label 0, the padding included): D to the nearest labelled voxel; on a
+        // binary volume, whose one label is the object, its voxels' D to the background too.
         BinaryVolume labelled{grid, std::vector<std::uint8_t>(std::size_t(grid.voxel_count()))};
 #pragma omp parallel for schedule(static)
         for (std::int64_t v = 0; v < grid.voxel_count(); ++v) labelled.mask[std::size_t(v)] = volume.at_linear(v) != 0;
-        const PaddedDistanceMap map = padded_distance_transform(labelled, DistanceTarget::object, maps.padding, saturation);
+        const DistanceTarget target = volume.is_binary() ? DistanceTarget::other_kind : DistanceTarget::object;
+        const PaddedDistanceMap map = padded_distance_transform(labelled, target, maps.padding, saturation);
         maps.grid = map.grid;
         maps.distance.resize(map.distance.size());
         const auto voxels = static_cast<std::int64_t>(map.distance.size());
@@ -168,7 +170,8 @@ ReachMaps reach_maps(const VoxelLabels& volume, double cap) {
             maps.distance[std::size_t(v)] = distance > 0 ? stored_distance(maps, distance) : 0;
         }
     }
-    // Every other label: D to the nearest voxel of another label (the background included).
+    if (volume.is_binary()) return maps;
+    // Every label: D to the nearest voxel of another label (the background included).
     const std::vector<std::array<Index3, 2>> boxes = label_boxes(volume);
     for (std::uint32_t l = 1; l < boxes.size(); ++l)
         if (boxes[l][1][0] >= 0) fill_label_distances(volume, l, boxes[l], saturation, maps);

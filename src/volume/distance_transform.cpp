@@ -42,9 +42,17 @@ void lower_envelope(const double* in, double* out, std::int64_t n, double w, boo
         value[std::size_t(k)] = fq;
         boundary[std::size_t(k)] = k == 0 ? -kInfinity : s;
     };
+    // Inside a run of targets (value 0) only the run's two ends can be nearest to a point beyond
+    // it, and the points of the run are at 0: the run enters as its two ends (the other sites are
+    // strictly farther from every point where they would count, so the values are the same).
+    const auto interior_target = [&](std::int64_t q) {
+        const bool before = q > 0 ? in[q - 1] == 0 : border_sites;
+        const bool after = q + 1 < n ? in[q + 1] == 0 : border_sites;
+        return in[q] == 0 && before && after;
+    };
     if (border_sites) push(-1.0, 0.0);
     for (std::int64_t q = 0; q < n; ++q)
-        if (in[q] < limit) push(double(q), in[q]);
+        if (in[q] < limit && !interior_target(q)) push(double(q), in[q]);
     if (border_sites) push(double(n), 0.0);
     if (k < 0) {
         for (std::int64_t p = 0; p < n; ++p) out[p] = limit;
@@ -54,7 +62,7 @@ void lower_envelope(const double* in, double* out, std::int64_t n, double w, boo
     for (std::int64_t p = 0; p < n; ++p) {
         while (j < k && boundary[std::size_t(j + 1)] < double(p)) ++j;
         const double d = double(p) - site[std::size_t(j)];
-        out[p] = std::min(limit, value[std::size_t(j)] + w * d * d);
+        out[p] = in[p] == 0 ? 0.0 : std::min(limit, value[std::size_t(j)] + w * d * d);  // in may be out
     }
 }
 
@@ -63,9 +71,31 @@ void lower_envelope(const double* in, double* out, std::int64_t n, double w, boo
 /// would use 4 bytes of each 64-byte cache line).
 constexpr std::int64_t kLinesPerTile = 16;
 
+/// The targets of a transform, and the lines' border sites (the background beyond the grid).
+struct PassTargets {
+    DistanceTarget target;
+    bool border_sites() const { return target == DistanceTarget::background; }
+};
+
+/// Two envelopes for DistanceTarget::other_kind, whose values carry the voxel's kind in their sign
+/// (object voxels negative): the object voxels' squared distances to the background (the
+/// background voxels its sites of value 0, the border too), the background voxels' to the object.
+/// A voxel's own value is never 0 (the other kind is a voxel away at least), so the sign survives.
+void two_sided_envelope(double* line, double* to_background, double* to_object, std::int64_t n, double w, double limit,
+                        std::vector<double>& site, std::vector<double>& value, std::vector<double>& boundary) {
+    for (std::int64_t p = 0; p < n; ++p) {
+        const bool object = std::signbit(line[p]);
+        to_background[p] = object ? -line[p] : 0.0;
+        to_object[p] = object ? 0.0 : line[p];
+    }
+    lower_envelope(to_background, to_background, n, w, true, limit, site, value, boundary);
+    lower_envelope(to_object, to_object, n, w, false, limit, site, value, boundary);
+    for (std::int64_t p = 0; p < n; ++p) line[p] = std::signbit(line[p]) ? -to_background[p] : to_object[p];
+}
+
 /// One pass along `axis` over every line of the grid, in place on `squared`. Along y and z, the
 /// lines are taken in tiles of kLinesPerTile neighbours along x, copied to contiguous work space.
-void pass_along(std::vector<float>& squared, const VoxelGrid& grid, int axis, bool border_sites, double limit) {
+void pass_along(std::vector<float>& squared, const VoxelGrid& grid, int axis, PassTargets targets, double limit) {
     const Index3& d = grid.dims;
     const std::int64_t n = d[std::size_t(axis)];
     const std::int64_t stride = axis == 0 ? 1 : axis == 1 ? d[0] : d[0] * d[1];
@@ -77,8 +107,8 @@ void pass_along(std::vector<float>& squared, const VoxelGrid& grid, int axis, bo
 #pragma omp parallel
     {
         const auto length = static_cast<std::size_t>(n);
-        std::vector<double> in(length * std::size_t(width)), out(length), site(length + 2), value(length + 2),
-            boundary(length + 2);
+        std::vector<double> in(length * std::size_t(width)), out(length), other(length), site(length + 2),
+            value(length + 2), boundary(length + 2);
 #pragma omp for schedule(static)
         for (std::int64_t tile = 0; tile < tiles; ++tile) {
             Index3 start{0, 0, 0};
@@ -91,8 +121,13 @@ void pass_along(std::vector<float>& squared, const VoxelGrid& grid, int axis, bo
                 for (std::int64_t l = 0; l < lines; ++l)
                     in[std::size_t(l * n + p)] = squared[std::size_t(first + l * line_step + p * stride)];
             for (std::int64_t l = 0; l < lines; ++l) {
-                lower_envelope(in.data() + l * n, out.data(), n, w, border_sites, limit, site, value, boundary);
-                for (std::int64_t p = 0; p < n; ++p) in[std::size_t(l * n + p)] = out[std::size_t(p)];
+                double* line = in.data() + l * n;
+                if (targets.target == DistanceTarget::other_kind) {
+                    two_sided_envelope(line, out.data(), other.data(), n, w, limit, site, value, boundary);
+                    continue;
+                }
+                lower_envelope(line, out.data(), n, w, targets.border_sites(), limit, site, value, boundary);
+                std::copy(out.begin(), out.end(), line);
             }
             for (std::int64_t p = 0; p < n; ++p)
                 for (std::int64_t l = 0; l < lines; ++l)
@@ -111,7 +146,6 @@ PaddedDistanceMap padded_distance_transform(const BinaryVolume& volume, Distance
                                             double cap) {
     if (padding < 0) throw Error("padded_distance_transform: the padding must not be negative");
     if (!(cap > 0)) throw Error("padded_distance_transform: the cap must be positive");
-    const bool to_background = target == DistanceTarget::background;
     PaddedDistanceMap map;
     map.padding = padding;
     map.grid = volume.grid;
@@ -121,21 +155,30 @@ PaddedDistanceMap padded_distance_transform(const BinaryVolume& volume, Distance
     // square roots at the end. The padding is background.
     // Capping commutes with every pass (min(cap², f) enveloped is min(cap², envelope of f)), so
     // the cap enters as the value of non-targets, and sites at or above it drop out of the lines.
+    // Both kinds for other_kind: an object voxel starts at −cap² (the sign marks its kind).
     const float target_value = 0.0f, other = float(cap * cap);
     const double limit = double(other);
-    map.distance.assign(std::size_t(map.grid.voxel_count()), to_background ? target_value : other);
+    const auto initial = [&](bool object) {
+        switch (target) {
+            case DistanceTarget::background: return object ? other : target_value;
+            case DistanceTarget::object: return object ? target_value : other;
+            case DistanceTarget::other_kind: return object ? -other : other;
+        }
+        return other;
+    };
+    map.distance.assign(std::size_t(map.grid.voxel_count()), initial(false));
     const Index3& d = volume.grid.dims;
 #pragma omp parallel for schedule(static)
     for (std::int64_t k = 0; k < d[2]; ++k)
         for (std::int64_t j = 0; j < d[1]; ++j) {
             const std::uint8_t* mask = volume.mask.data() + volume.grid.linear_index(0, j, k);
             float* row = map.distance.data() + map.grid.linear_index(padding, j + padding, k + padding);
-            for (std::int64_t i = 0; i < d[0]; ++i) row[i] = (mask[i] != 0) != to_background ? target_value : other;
+            for (std::int64_t i = 0; i < d[0]; ++i) row[i] = initial(mask[i] != 0);
         }
-    for (int axis = 0; axis < 3; ++axis) pass_along(map.distance, map.grid, axis, to_background, limit);
+    for (int axis = 0; axis < 3; ++axis) pass_along(map.distance, map.grid, axis, PassTargets{target}, limit);
     const auto voxels = static_cast<std::int64_t>(map.distance.size());
 #pragma omp parallel for schedule(static)
-    for (std::int64_t v = 0; v < voxels; ++v) map.distance[std::size_t(v)] = std::sqrt(map.distance[std::size_t(v)]);
+    for (std::int64_t v = 0; v < voxels; ++v) map.distance[std::size_t(v)] = std::sqrt(std::abs(map.distance[std::size_t(v)]));
     return map;
 }
 
