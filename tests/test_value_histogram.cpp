@@ -45,6 +45,33 @@ TEST(ValueHistogram, CountsEveryIntegerValueOnce) {
     EXPECT_EQ(describe_modes(modes, true), "40 (87%), 200 (12%), -3 (1%)");
 }
 
+TEST(ValueHistogram, IntegersCountedInThePassOverTheRangeEqualASecondPass) {
+    // Integers in an order that lowers the minimum and raises the maximum several times: the
+    // counts kept while the range grows are those of a second pass over fixed bins; beyond the
+    // limit of values they are given up.
+    std::vector<double> values;
+    for (int n = 0; n < 500; ++n) values.push_back(double((n * 37) % 90) - double(n % 7 == 0 ? 40 : 0));
+    ValueHistogram one_pass;
+    one_pass.exact_limit = 256;
+    for (double v : values) one_pass.add(v);
+    ValueHistogram two_passes;
+    for (double v : values) two_passes.add(v);
+    ASSERT_TRUE(two_passes.exact_counts.empty());  // no limit given: nothing counted
+    two_passes.bins.assign(std::size_t(two_passes.max - two_passes.min + 1), 0);
+    for (double v : values) two_passes.add(v);
+    EXPECT_EQ(one_pass.min, two_passes.min);
+    EXPECT_EQ(one_pass.max, two_passes.max);
+    EXPECT_EQ(one_pass.exact_counts, two_passes.bins);
+    ValueHistogram narrow;
+    narrow.exact_limit = 50;  // the values span 130
+    for (double v : values) narrow.add(v);
+    EXPECT_TRUE(narrow.exact_counts.empty());
+    ValueHistogram fractional;
+    fractional.exact_limit = 256;
+    for (double v : {1.0, 2.0, 2.5}) fractional.add(v);
+    EXPECT_TRUE(fractional.exact_counts.empty());
+}
+
 TEST(ValueHistogram, ModesAreDisjointAndHoldEveryVoxelBetweenMinima) {
     ValueHistogram h;
     h.min = 0;

@@ -18,14 +18,20 @@ struct ValueHistogram {
     bool integral = true;    ///< every value is an integer
     double bin_width = 1;
     std::vector<std::int64_t> bins;
+    /// While `bins` is empty, and as long as every value is an integer and they span at most
+    /// `exact_limit` values: the count of each value min + i (empty otherwise), so that integer
+    /// data needs no second pass (read_value_histogram).
+    std::vector<std::int64_t> exact_counts;
+    std::int64_t exact_limit = 0;
 
-    /// While `bins` is empty: extends min, max, integral, count. Then: counts `value` in its bin.
+    /// While `bins` is empty: extends min, max, integral, count, exact_counts. Then: counts
+    /// `value` in its bin.
     void add(double value);
 };
 
 /// The histogram of the values of `path` (any format read_volume accepts; same checks, same
-/// errors), read twice as it streams: once for the range, once for the counts; nothing per voxel
-/// is kept. Integer values spanning at most `max_bins` values get one bin each, others
+/// errors), streamed: once for the range (and the counts, for integers spanning at most
+/// `max_bins` values), once more for the counts of other data; nothing per voxel is kept. Integer values spanning at most `max_bins` values get one bin each, others
 /// `max_bins` equal bins. NaN values are not counted.
 ValueHistogram read_value_histogram(const std::string& path, const RawVolumeLayout* raw_layout = nullptr,
                                     const VolumeLimits& limits = {}, int max_bins = 256);

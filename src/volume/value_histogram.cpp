@@ -10,14 +10,37 @@
 
 namespace dsreg {
 
+namespace {
+
+/// Counts an integer `value` in counts[value − min] (min already lowered to it if need be, the
+/// counts of the previous minimum `old_min` shifted up), or gives the counts up when the values
+/// stop being integers or span more than `limit`.
+void count_exactly(std::vector<std::int64_t>& counts, double value, double old_min, double min, double max, bool integral,
+                   std::int64_t limit) {
+    if (!integral || max - min + 1 > double(limit)) {
+        counts.clear();
+        counts.shrink_to_fit();
+        return;
+    }
+    if (min < old_min) counts.insert(counts.begin(), std::size_t(old_min - min), 0);
+    const auto size = std::size_t(max - min + 1);
+    if (counts.size() < size) counts.resize(size, 0);
+    ++counts[std::size_t(value - min)];
+}
+
+}  // namespace
+
 void ValueHistogram::add(double value) {
     if (std::isnan(value)) return;
     if (bins.empty()) {
         if (count == 0) min = max = value;
+        const double old_min = min;
+        const bool counting = count == 0 || !exact_counts.empty();
         min = std::min(min, value);
         max = std::max(max, value);
         integral = integral && value == std::floor(value);
         ++count;
+        if (counting) count_exactly(exact_counts, value, old_min, min, max, integral, exact_limit);
         return;
     }
     const double position = (value - min) / bin_width;
@@ -30,6 +53,7 @@ ValueHistogram read_value_histogram(const std::string& path, const RawVolumeLayo
                                     int max_bins) {
     using volume_io_detail::VoxelDestination;
     ValueHistogram histogram;
+    histogram.exact_limit = max_bins;
     {
         VoxelDestination range = VoxelDestination::statistics(histogram);
         volume_io_detail::read_volume_voxels(path, raw_layout, limits, range);
@@ -37,6 +61,11 @@ ValueHistogram read_value_histogram(const std::string& path, const RawVolumeLayo
     if (histogram.count == 0) return histogram;
     const double span = histogram.max - histogram.min;
     const bool one_per_value = histogram.integral && span + 1 <= max_bins;
+    if (one_per_value && histogram.exact_counts.size() == std::size_t(span + 1)) {  // counted in the first pass
+        histogram.bins.swap(histogram.exact_counts);
+        return histogram;
+    }
+    histogram.exact_counts.clear();
     const std::size_t bins = one_per_value ? static_cast<std::size_t>(span + 1) : static_cast<std::size_t>(std::max(1, max_bins));
     histogram.bin_width = one_per_value ? 1.0 : std::max(span / double(bins), std::numeric_limits<double>::min());
     histogram.bins.assign(bins, 0);
