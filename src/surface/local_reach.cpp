@@ -214,19 +214,28 @@ double half_local_thickness(const VoxelLabels& volume, const ReachMaps& maps, co
     const Index3 centre{v[0] + maps.padding, v[1] + maps.padding, v[2] + maps.padding};
     Index3 reach;  // a ball of radius ≤ limit containing v has its centre within limit of v
     for (int a = 0; a < 3; ++a) reach[std::size_t(a)] = std::int64_t(std::ceil(limit / s[a]));
+    // The result is the largest min(D(y), limit) over the balls that contain v, whatever the
+    // order: the offsets are taken from the centre out (0, −1, 1, −2, 2, …), so that large balls
+    // come first and most voxels are passed over on their distance alone.
+    const auto offset = [](std::int64_t n) { return n % 2 == 0 ? n / 2 : -(n + 1) / 2; };
     double best = 0;
-    for (std::int64_t k = centre[2] - reach[2]; k <= centre[2] + reach[2]; ++k)
-        for (std::int64_t j = centre[1] - reach[1]; j <= centre[1] + reach[1]; ++j)
-            for (std::int64_t i = centre[0] - reach[0]; i <= centre[0] + reach[0]; ++i) {
-                if (!maps.grid.contains(i, j, k) || label_at(volume, maps, {i, j, k}) != kind) continue;
+    for (std::int64_t nk = 0; nk <= 2 * reach[2]; ++nk) {
+        const std::int64_t k = centre[2] + offset(nk);
+        for (std::int64_t nj = 0; nj <= 2 * reach[1]; ++nj) {
+            const std::int64_t j = centre[1] + offset(nj);
+            for (std::int64_t ni = 0; ni <= 2 * reach[0]; ++ni) {
+                const std::int64_t i = centre[0] + offset(ni);
+                if (!maps.grid.contains(i, j, k)) continue;
                 const std::uint16_t steps = maps.distance[std::size_t(maps.grid.linear_index(i, j, k))];
                 const double d = maps.unit * steps;
-                if (d <= best) continue;
-                const Eigen::Vector3d offset(double(i - centre[0]) * s.x(), double(j - centre[1]) * s.y(),
-                                             double(k - centre[2]) * s.z());
-                if (ball_contains(maps, steps, offset.norm())) best = std::min(d, limit);
+                if (d <= best || label_at(volume, maps, {i, j, k}) != kind) continue;
+                const Eigen::Vector3d to_v(double(i - centre[0]) * s.x(), double(j - centre[1]) * s.y(),
+                                           double(k - centre[2]) * s.z());
+                if (ball_contains(maps, steps, to_v.norm())) best = std::min(d, limit);
                 if (best >= limit) return limit;
             }
+        }
+    }
     return best;
 }
 
