@@ -52,9 +52,12 @@ double reach_along(const VoxelLabels& volume, const ReachMaps& maps, std::uint32
                    const Eigen::Vector3d& direction, const Eigen::Vector3d& anchor) {
     const double step = 0.5 * maps.grid.spacing.minCoeff();
     double best = maps.grid.spacing.minCoeff();
+    Index3 previous{-1, -1, -1};
     for (double t = 0.5 * step; t <= maps.cap; t += step) {
         Index3 y;
         if (!voxel_at(maps.grid, from + t * direction, y)) break;
+        if (y == previous) continue;  // half-voxel steps: the same voxel, the same test
+        previous = y;
         if (label_at(volume, maps, y) != label) break;
         const std::uint16_t steps = maps.distance[std::size_t(maps.grid.linear_index(y[0], y[1], y[2]))];
         if (ball_contains(maps, steps, (maps.grid.voxel_center(y[0], y[1], y[2]) - anchor).norm()))
