@@ -393,8 +393,9 @@ private:
         // positions around it, which no other part writes), the small ones first. A part solved
         // beside others runs on one thread (nested OpenMP regions are inactive), so the large ones
         // go side by side only when none holds more than 2/3 of their vertices (one part gains
-        // about 1.4× from two threads): lobster.vol's rounds and exact solves have two to four of
-        // 2–14K vertices (their solves 0.82 → 0.55–0.69 s of the stage's 1.2 s).
+        // about 1.4× from two threads), and only in the rounds (block-Jacobi CG): the exact
+        // solves' multigrid hierarchies side by side raised lobster.vol's peak by 19 MiB, above
+        // that of the solve. Its rounds 1–4 have three or four of 2–8K vertices.
         std::vector<std::size_t> small, large;
         std::size_t large_vertices = 0, largest = 0;
         for (std::size_t k = 0; k < groups.size(); ++k) {
@@ -419,7 +420,8 @@ private:
                 throw Error("validity repair: a local system is not positive definite");
         };
         solve_side_by_side(small, 8, small.size() > 16);
-        solve_side_by_side(large, 1, !o_.clamp_half_width && large.size() > 1 && 3 * largest <= 2 * large_vertices);
+        const bool multigrid = tolerance <= kExactPartTolerance;  // each part builds a hierarchy
+        solve_side_by_side(large, 1, !o_.clamp_half_width && !multigrid && large.size() > 1 && 3 * largest <= 2 * large_vertices);
         for (std::size_t k = 0; k < groups.size(); ++k) {
             moved_->insert(moved_->end(), moved[k].begin(), moved[k].end());
             for (const std::int32_t v : moved[k]) changed_[std::size_t(v)] = 1;
