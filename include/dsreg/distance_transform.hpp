@@ -20,8 +20,8 @@ enum class DistanceTarget {
     object,      ///< distance to the nearest object voxel centre (0 on object voxels; +inf for
                  ///< every voxel of a volume without object voxels)
     other_kind,  ///< both in one map: on object voxels the distance to the background, on
-                 ///< background voxels the distance to the object (never 0); the cost of one
-                 ///< transform's memory and about 1.5 times its arithmetic
+                 ///< background voxels the distance to the object (never 0); the memory of one
+                 ///< transform, two envelopes per line
 };
 
 /// The exact Euclidean distance transform, one value per voxel (x fastest, as the mask):

@@ -31,8 +31,9 @@ struct ValueHistogram {
 
 /// The histogram of the values of `path` (any format read_volume accepts; same checks, same
 /// errors), streamed: once for the range (and the counts, for integers spanning at most
-/// `max_bins` values), once more for the counts of other data; nothing per voxel is kept. Integer values spanning at most `max_bins` values get one bin each, others
-/// `max_bins` equal bins. NaN values are not counted.
+/// `max_bins` values), once more for the counts of other data; nothing per voxel is kept.
+/// Integer values spanning at most `max_bins` values get one bin each, others `max_bins` equal
+/// bins. NaN values are not counted.
 ValueHistogram read_value_histogram(const std::string& path, const RawVolumeLayout* raw_layout = nullptr,
                                     const VolumeLimits& limits = {}, int max_bins = 256);
 

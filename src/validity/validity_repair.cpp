@@ -395,12 +395,15 @@ private:
         // go side by side only when none holds more than 2/3 of their vertices (one part gains
         // about 1.4× from two threads), and only in the rounds (block-Jacobi CG): the exact
         // solves' multigrid hierarchies side by side raised lobster.vol's peak by 19 MiB, above
-        // that of the solve. Its rounds 1–4 have three or four of 2–8K vertices.
+        // that of the solve. lobster.vol's rounds 1–4 have three or four of 2–8K vertices.
         std::vector<std::size_t> small, large;
         std::size_t large_vertices = 0, largest = 0;
         for (std::size_t k = 0; k < groups.size(); ++k) {
-            (is_small(groups[k]) ? small : large).push_back(k);
-            if (is_small(groups[k])) continue;
+            if (is_small(groups[k])) {
+                small.push_back(k);
+                continue;
+            }
+            large.push_back(k);
             large_vertices += groups[k].size();
             largest = std::max(largest, groups[k].size());
         }

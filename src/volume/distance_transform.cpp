@@ -71,12 +71,6 @@ void lower_envelope(const double* in, double* out, std::int64_t n, double w, boo
 /// would use 4 bytes of each 64-byte cache line).
 constexpr std::int64_t kLinesPerTile = 16;
 
-/// The targets of a transform, and the lines' border sites (the background beyond the grid).
-struct PassTargets {
-    DistanceTarget target;
-    bool border_sites() const { return target == DistanceTarget::background; }
-};
-
 /// Two envelopes for DistanceTarget::other_kind, whose values carry the voxel's kind in their sign
 /// (object voxels negative): the object voxels' squared distances to the background (the
 /// background voxels its sites of value 0, the border too), the background voxels' to the object.
@@ -95,7 +89,7 @@ void two_sided_envelope(double* line, double* to_background, double* to_object, 
 
 /// One pass along `axis` over every line of the grid, in place on `squared`. Along y and z, the
 /// lines are taken in tiles of kLinesPerTile neighbours along x, copied to contiguous work space.
-void pass_along(std::vector<float>& squared, const VoxelGrid& grid, int axis, PassTargets targets, double limit) {
+void pass_along(std::vector<float>& squared, const VoxelGrid& grid, int axis, DistanceTarget target, double limit) {
     const Index3& d = grid.dims;
     const std::int64_t n = d[std::size_t(axis)];
     const std::int64_t stride = axis == 0 ? 1 : axis == 1 ? d[0] : d[0] * d[1];
@@ -122,11 +116,12 @@ void pass_along(std::vector<float>& squared, const VoxelGrid& grid, int axis, Pa
                     in[std::size_t(l * n + p)] = squared[std::size_t(first + l * line_step + p * stride)];
             for (std::int64_t l = 0; l < lines; ++l) {
                 double* line = in.data() + l * n;
-                if (targets.target == DistanceTarget::other_kind) {
+                if (target == DistanceTarget::other_kind) {
                     two_sided_envelope(line, out.data(), other.data(), n, w, limit, site, value, boundary);
                     continue;
                 }
-                lower_envelope(line, out.data(), n, w, targets.border_sites(), limit, site, value, boundary);
+                // The background beyond the grid: border sites of the transform to the background.
+                lower_envelope(line, out.data(), n, w, target == DistanceTarget::background, limit, site, value, boundary);
                 std::copy(out.begin(), out.end(), line);
             }
             for (std::int64_t p = 0; p < n; ++p)
@@ -175,7 +170,7 @@ PaddedDistanceMap padded_distance_transform(const BinaryVolume& volume, Distance
             float* row = map.distance.data() + map.grid.linear_index(padding, j + padding, k + padding);
             for (std::int64_t i = 0; i < d[0]; ++i) row[i] = initial(mask[i] != 0);
         }
-    for (int axis = 0; axis < 3; ++axis) pass_along(map.distance, map.grid, axis, PassTargets{target}, limit);
+    for (int axis = 0; axis < 3; ++axis) pass_along(map.distance, map.grid, axis, target, limit);
     const auto voxels = static_cast<std::int64_t>(map.distance.size());
 #pragma omp parallel for schedule(static)
     for (std::int64_t v = 0; v < voxels; ++v) map.distance[std::size_t(v)] = std::sqrt(std::abs(map.distance[std::size_t(v)]));
