@@ -10,6 +10,7 @@
 #include <omp.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <random>
 
@@ -352,6 +353,41 @@ TEST(ValidityRepair, TheReversibleModeStaysReversible) {
     const Eigen::VectorXd x = flatten_points(r.positions);
     EXPECT_TRUE((x.array() >= lower.array()).all() && (x.array() <= upper.array()).all());
     EXPECT_EQ(classify_voxel_centres(volume, r.positions, s.quads).wrong(), 0);
+}
+
+TEST(ValidityRepair, TheReversibleModesPartsSideBySideReachWhatOneThreadReaches) {
+    // With the clamp boxes every part is a box QP factored by CHOLMOD; at two threads the parts of
+    // a round are solved side by side, each with the BLAS at one thread. They share no unknown, so
+    // the repair must take the same course as at one thread and end at the same positions (to
+    // the rounding of the factorizations), and the BLAS must get its thread count back.
+    using GetThreads = int (*)();
+    const auto blas_threads = reinterpret_cast<GetThreads>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+    std::mt19937 rng(11);
+    std::bernoulli_distribution coin(0.45);
+    const BinaryVolume volume = test::make_volume({10, 10, 10}, [&](double, double, double) { return coin(rng); });
+    const DigitalSurface s = extract_digital_surface(volume, Connectivity::TwentySix);
+    std::normal_distribution<double> normal(0, 1);
+    PointMatrix u(s.face_count(), 3);
+    for (std::int64_t f = 0; f < s.face_count(); ++f) u.row(f) = Eigen::RowVector3d(normal(rng), normal(rng), normal(rng)).normalized();
+    const ClampedRegularizationResult clamped = regularize_clamped(s, u, RegularizationWeights{});
+    ValidityRepairOptions options;
+    options.clamp_half_width = 0.499;
+    const int threads = omp_get_max_threads();
+    std::vector<ValidityRepairResult> runs;
+    for (const int count : {1, 2}) {
+        omp_set_num_threads(count);
+        runs.push_back(repair_validity(s, u, RegularizationWeights{}, clamped.positions, options));
+        if (blas_threads && !std::getenv("OPENBLAS_NUM_THREADS")) EXPECT_EQ(blas_threads(), count);
+    }
+    omp_set_num_threads(threads);
+    ASSERT_GT(runs[0].report.parts_solved, 2 * runs[0].report.rounds) << "the test needs rounds of several parts";
+    for (const ValidityRepairResult& r : runs) {
+        EXPECT_TRUE(r.report.after.valid());
+        EXPECT_TRUE(r.report.converged);
+    }
+    EXPECT_EQ(runs[1].report.rounds, runs[0].report.rounds);
+    EXPECT_EQ(runs[1].report.parts_solved, runs[0].report.parts_solved);
+    EXPECT_LT((runs[1].positions - runs[0].positions).cwiseAbs().maxCoeff(), 1e-9);
 }
 
 TEST(ValidityRepair, TheMeshIsTheSameWhateverTheLoadAndTheBlasThreads) {

@@ -19,13 +19,37 @@ struct OpenBlas {
     bool user_choice = std::getenv("OPENBLAS_NUM_THREADS") != nullptr || std::getenv("GOTO_NUM_THREADS") != nullptr;
 };
 
+const OpenBlas& open_blas() {
+    static const OpenBlas blas;  // looked up once
+    return blas;
+}
+
 }  // namespace
 
 void use_blas_threads() {
-    static const OpenBlas blas;  // looked up once
+    const OpenBlas& blas = open_blas();
     if (!blas.get || !blas.set || blas.user_choice || omp_in_parallel()) return;
     const int wanted = std::max(1, std::min(omp_get_max_threads(), omp_get_num_procs()));
     if (blas.get() != wanted) blas.set(wanted);
+}
+
+OneBlasThread::OneBlasThread() {
+    const OpenBlas& blas = open_blas();
+    if (!blas.get || !blas.set) {
+        serial_ = true;
+        return;
+    }
+    if (blas.user_choice || omp_in_parallel()) {
+        serial_ = blas.get() == 1;
+        return;
+    }
+    changed_ = blas.get() != 1;
+    if (changed_) blas.set(1);
+    serial_ = true;
+}
+
+OneBlasThread::~OneBlasThread() {
+    if (changed_) use_blas_threads();
 }
 
 }  // namespace dsreg::detail

@@ -13,4 +13,23 @@ namespace dsreg::detail {
 /// in the same process). Nothing happens inside a parallel region or if the BLAS is not OpenBLAS.
 void use_blas_threads();
 
+/// While alive, OpenBLAS runs every call on its caller's thread alone (one BLAS thread), so that
+/// CHOLMOD factorizations may run side by side on OpenMP's threads without queueing for the
+/// BLAS's own threads; the destructor gives back use_blas_threads()'s count. A count the user
+/// chose is kept, and so is the BLAS's state inside a parallel region; `serial()` says whether
+/// calls from several threads at once now each run on their own thread (true for a BLAS other
+/// than OpenBLAS, which dsreg cannot set: the reference BLAS and BLIS are reentrant).
+class OneBlasThread {
+public:
+    OneBlasThread();
+    ~OneBlasThread();
+    OneBlasThread(const OneBlasThread&) = delete;
+    OneBlasThread& operator=(const OneBlasThread&) = delete;
+    bool serial() const { return serial_; }
+
+private:
+    bool serial_ = false;
+    bool changed_ = false;
+};
+
 }  // namespace dsreg::detail

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,7 @@
 
 // The block rows of R, computed one vertex at a time (an internal header of the regularization
 // module): the repair reads the rows of its region only, never the whole assembled matrix.
+#include "../regularization/blas_threads.hpp"
 #include "../regularization/regularization_operator.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/label_surface.hpp"
@@ -391,11 +393,12 @@ private:
         }
         // The parts share no unknown and no coupling: they are solved side by side (each reads the
         // positions around it, which no other part writes), the small ones first. A part solved
-        // beside others runs on one thread (nested OpenMP regions are inactive), so the large ones
-        // go side by side only when none holds more than 2/3 of their vertices (one part gains
-        // about 1.4× from two threads), and only in the rounds (block-Jacobi CG): the exact
-        // solves' multigrid hierarchies side by side raised lobster.vol's peak by 19 MiB, above
-        // that of the solve. lobster.vol's rounds 1–4 have three or four of 2–8K vertices.
+        // beside others runs on one thread (nested OpenMP regions are inactive, the BLAS under
+        // the box QPs' CHOLMOD at one thread), so the large ones go side by side only when none
+        // holds more than 2/3 of their vertices (one part gains about 1.2–1.4× from two threads),
+        // and without the clamp boxes only in the rounds (block-Jacobi CG): the exact solves'
+        // multigrid hierarchies side by side raised lobster.vol's peak by 19 MiB, above that of
+        // the solve. lobster.vol's rounds 1–4 have three or four of 2–8K vertices.
         std::vector<std::size_t> small, large;
         std::size_t large_vertices = 0, largest = 0;
         for (std::size_t k = 0; k < groups.size(); ++k) {
@@ -411,6 +414,8 @@ private:
         std::vector<char> converged(groups.size(), 1);
         const auto solve_side_by_side = [&](const std::vector<std::size_t>& which, int chunk, bool together) {
             std::vector<char> failed(which.size(), 0);
+            std::optional<detail::OneBlasThread> blas;
+            if (together) together = blas.emplace().serial();
 #pragma omp parallel for schedule(dynamic, chunk) if (together)
             for (std::size_t k = 0; k < which.size(); ++k) {
                 try {
@@ -424,7 +429,7 @@ private:
         };
         solve_side_by_side(small, 8, small.size() > 16);
         const bool multigrid = tolerance <= kExactPartTolerance;  // each part builds a hierarchy
-        solve_side_by_side(large, 1, !o_.clamp_half_width && !multigrid && large.size() > 1 && 3 * largest <= 2 * large_vertices);
+        solve_side_by_side(large, 1, (o_.clamp_half_width || !multigrid) && large.size() > 1 && 3 * largest <= 2 * large_vertices);
         for (std::size_t k = 0; k < groups.size(); ++k) {
             moved_->insert(moved_->end(), moved[k].begin(), moved[k].end());
             for (const std::int32_t v : moved[k]) changed_[std::size_t(v)] = 1;
@@ -433,12 +438,12 @@ private:
         report.parts_solved += std::int64_t(groups.size());
     }
 
-    /// Parts this small are solved by a simplicial Cholesky factorization, several at once; larger
-    /// ones by CG (multigrid CG in the exact solves), side by side when none dominates, and the
-    /// box QPs one after the other.
-    bool is_small(const std::vector<std::int32_t>& part) const {
+    /// Parts this small are solved several at once: by a simplicial Cholesky factorization, or
+    /// with the clamp boxes by the box QP; larger ones by CG (multigrid CG in the exact solves) or
+    /// the box QP, side by side when none dominates.
+    static bool is_small(const std::vector<std::int32_t>& part) {
         constexpr std::size_t kSmallPartVertices = 2000;
-        return !o_.clamp_half_width && part.size() <= kSmallPartVertices;
+        return part.size() <= kSmallPartVertices;
     }
 
     /// Adds block `M` at (row vertex r, column vertex c) of E' restricted to the part's vertices
