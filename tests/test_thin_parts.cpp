@@ -6,6 +6,7 @@
 
 #include <cmath>
 
+#include "dsreg/adaptive_normals.hpp"
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/evaluation.hpp"
 #include "dsreg/implicit_shape.hpp"
@@ -70,6 +71,34 @@ TEST(ThinParts, TubeAndShellKeepTheirVolumeAndVoxelsWithTheDefaults) {
             plain.regularization.positions, mesh_triangles(plain.regularization.positions, plain.surface.quads));
         EXPECT_LT(plain_volume / truth, 0.91);
     }
+}
+
+TEST(ThinParts, TheAdaptiveFieldsDistanceMapsGiveTheReachesOfMapsMadeAfresh) {
+    // With the defaults the thin-part weights measure the reach up to the cap of the adaptive
+    // field's maps, and take those maps instead of computing them again: along the final field,
+    // the kept maps must give every surfel the reaches that maps made for the thin parts alone
+    // give, and the pipeline must release them before its solve.
+    const VolumeSource source = shape_at_quarter_step("(x^2+y^2+z^2+9-0.140625)^2-36*(x^2+y^2)", 3.6);
+    const LoadedVolume loaded = load_volume(source);
+    const DigitalSurface surface = extract_digital_surface(loaded.volume, Connectivity::TwentySix);
+    const AdaptiveNormalOptions options = default_adaptive_options(NormalFieldOptions{}, loaded);
+    ASSERT_TRUE(options.keep_reach_maps);
+    const AdaptiveNormalField field = adaptive_integral_invariant_normals(loaded.voxel_labels(), surface, options);
+    ASSERT_TRUE(field.reach_maps);
+    const double cap = thin_part_reach_cap(RegularizationExtensions{}, loaded.volume.grid);
+    ASSERT_EQ(field.reach_maps->cap, cap) << "the defaults must share the maps";
+    const SurfelReach kept = surfel_reach(loaded.voxel_labels(), surface, field.normals, *field.reach_maps);
+    const SurfelReach fresh = surfel_reach(loaded.voxel_labels(), surface, field.normals, cap);
+    EXPECT_TRUE(kept.inner == fresh.inner);
+    EXPECT_TRUE(kept.outer == fresh.outer);
+    EXPECT_LT(kept.smallest().minCoeff(), alpha_reach(RegularizationExtensions{}, loaded.volume.grid))
+        << "the tube must be a thin part";
+
+    PipelineOptions defaults;
+    defaults.validity = ValidityMode::Off;
+    const PipelineResult result = run_pipeline(loaded, defaults);
+    ASSERT_TRUE(result.field.adaptive.has_value());
+    EXPECT_FALSE(result.field.adaptive->reach_maps) << "kept past the thin parts";
 }
 
 TEST(ThinPartAlpha, InverseSquareOfTheSmallestReachAroundEachVertexBelowTheReference) {

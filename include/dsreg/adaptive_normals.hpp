@@ -22,6 +22,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <memory>
 
 #include "dsreg/digital_surface.hpp"
 #include "dsreg/local_reach.hpp"
@@ -45,6 +46,10 @@ struct AdaptiveNormalOptions {
     int smoothing_steps = 0;      ///< steps of averaging over the adjacent faces where r < smoothing_below
     double smoothing_below = 0;   ///< physical units
     double smoothing_power = 2;   ///< weight of a neighbour g of f: max(0, u_f·u_g)^power
+    /// Hand the distance maps of the reach to the caller (AdaptiveNormalField::reach_maps) rather
+    /// than free them on return: for a later stage that needs the maps of the same cap (the
+    /// pipeline's thin-part weights), which then need not compute them again.
+    bool keep_reach_maps = false;
 };
 
 struct AdaptiveNormalField {
@@ -53,6 +58,10 @@ struct AdaptiveNormalField {
     Eigen::VectorXd extrapolated;  ///< 1 where the field is extrapolated, else 0
     SurfelReach reach;       ///< the robust reach the radii come from
     double reach_cap = 0;    ///< up to which it was measured (physical units)
+    /// With AdaptiveNormalOptions::keep_reach_maps: the maps the reach was measured on (their
+    /// cap: max(reach_cap, max_radius / 2)); 2 bytes per voxel of the grown grid, to be released
+    /// once used.
+    std::shared_ptr<const ReachMaps> reach_maps;
 };
 
 /// The adaptive field. Steps: II at the narrow radius of the thick parts, max_radius/√2, on every

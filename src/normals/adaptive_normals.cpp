@@ -170,7 +170,8 @@ AdaptiveNormalField adaptive_integral_invariant_normals(const VoxelLabels& volum
                                                 std::vector<int>(static_cast<std::size_t>(m), pilot_level), o.kernel);
     AdaptiveNormalField field;
     field.reach_cap = std::max(o.reach_cap, o.max_radius / o.reach_factor + volume.grid().spacing.maxCoeff());
-    const ReachMaps maps = reach_maps(volume, std::max(field.reach_cap, 0.5 * o.max_radius));
+    auto kept = std::make_shared<const ReachMaps>(reach_maps(volume, std::max(field.reach_cap, 0.5 * o.max_radius)));
+    const ReachMaps& maps = *kept;
     const SurfelReach raw = surfel_reach(volume, surface, pilot, maps);
     field.reach.inner = max_over_rings(surface, raw.inner, o.reach_rings);
     field.reach.outer = max_over_rings(surface, raw.outer, o.reach_rings);
@@ -185,6 +186,7 @@ AdaptiveNormalField adaptive_integral_invariant_normals(const VoxelLabels& volum
         for (std::int64_t f = 0; f < m; ++f) smooth[std::size_t(f)] = field.radius[f] < o.smoothing_below ? 1 : 0;
         smooth_field(surface, field.normals, o.smoothing_steps, o.smoothing_power, smooth);
     }
+    if (o.keep_reach_maps) field.reach_maps = std::move(kept);
     return field;
 }
 

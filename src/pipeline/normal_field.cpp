@@ -145,7 +145,10 @@ AdaptiveNormalOptions default_adaptive_options(const NormalFieldOptions& o, cons
     adaptive.min_radius = std::min(2.0 * loaded.volume.grid.spacing.minCoeff(), adaptive.max_radius);
     adaptive.reach_factor = 1.5;
     adaptive.extrapolation_min_radius = 6.0 * voxel;
-    adaptive.reach_cap = 13.0 * voxel;  // the default --alpha-reach (12 voxels) needs the reach up to there
+    // The thin-part weights measure the reach up to --alpha-reach + one voxel (thin_part_reach_cap):
+    // with the default, the same cap, so they take these maps (keep_reach_maps) instead of their own.
+    adaptive.reach_cap = thin_part_reach_cap(RegularizationExtensions{}, loaded.volume.grid);
+    adaptive.keep_reach_maps = true;
     adaptive.smoothing_steps = 4;       // on thin parts, whose small balls are noisy
     adaptive.smoothing_below = 5.0 * voxel;
     adaptive.kernel = parse_integral_invariant_kernel(o.ii_kernel);

@@ -47,13 +47,16 @@ void check_weight_flags(const PipelineOptions& o) {
 /// measured along the field used, whatever made it: so a field read back from --export-normals
 /// gives the same weights, and so the same mesh (the adaptive field's own reach follows its
 /// first field). The sheetness is measured at each face's own reach, the weights use the largest
-/// reach within a few rings (max_over_rings: one voxel of noise is not a thin part).
+/// reach within a few rings (max_over_rings: one voxel of noise is not a thin part). The
+/// adaptive field's distance maps serve when they have the same cap (the defaults).
 ThinParts thin_parts(const RegularizationExtensions& o, const VoxelLabels& volume, const DigitalSurface& surface,
                      const NormalField& field) {
     const double reference = alpha_reach(o, volume.grid());
     if (reference <= 0) return {};
-    const double cap = reference + volume.grid().spacing.maxCoeff();
-    const SurfelReach reach = surfel_reach(volume, surface, field.normals, cap);
+    const double cap = thin_part_reach_cap(o, volume.grid());
+    const ReachMaps* kept = field.adaptive ? field.adaptive->reach_maps.get() : nullptr;
+    const SurfelReach reach = kept && kept->cap == cap ? surfel_reach(volume, surface, field.normals, *kept)
+                                                       : surfel_reach(volume, surface, field.normals, cap);
     ThinParts parts;
     parts.reach = max_over_rings(surface, reach.smallest(), AdaptiveNormalOptions{}.reach_rings);
     if (sheet_alpha_reach(o, volume.grid()) != reference)
@@ -170,6 +173,7 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
     clock.start("regularize");
     result.weights = global_weights(o);
     const ThinParts thin = thin_parts(o.extensions, loaded.voxel_labels(), result.surface, result.field);
+    if (result.field.adaptive) result.field.adaptive->reach_maps.reset();  // used: freed before the solve
     result.sheet_faces = (thin.sheetness.array() >= 0.5).count();
     const Eigen::VectorXd local_shrink =
         apply_regularization_extensions(o.extensions, result.surface, result.field, thin, result.weights);

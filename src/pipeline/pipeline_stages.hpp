@@ -30,6 +30,9 @@ nlohmann::json at_report(const NormalFieldOptions& options, const NormalField& f
 /// The reference reach of --alpha-reach in physical units (its default: 12 voxels); 0 = off.
 double alpha_reach(const RegularizationExtensions& options, const VoxelGrid& grid);
 
+/// How far the thin-part weights measure the reach (physical units): alpha_reach + one voxel.
+double thin_part_reach_cap(const RegularizationExtensions& options, const VoxelGrid& grid);
+
 /// The reference reach of the thin sheets, --alpha-reach-sheet, in physical units (its default: 2
 /// voxels).
 double sheet_alpha_reach(const RegularizationExtensions& options, const VoxelGrid& grid);

@@ -127,6 +127,10 @@ double alpha_reach(const RegularizationExtensions& o, const VoxelGrid& grid) {
     return o.alpha_reach ? *o.alpha_reach : 12.0 * grid.spacing.maxCoeff();
 }
 
+double thin_part_reach_cap(const RegularizationExtensions& o, const VoxelGrid& grid) {
+    return alpha_reach(o, grid) + grid.spacing.maxCoeff();
+}
+
 double sheet_alpha_reach(const RegularizationExtensions& o, const VoxelGrid& grid) {
     return o.alpha_reach_sheet ? *o.alpha_reach_sheet : 2.0 * grid.spacing.maxCoeff();
 }
