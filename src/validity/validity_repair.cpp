@@ -414,8 +414,11 @@ private:
         std::vector<char> converged(groups.size(), 1);
         const auto solve_side_by_side = [&](const std::vector<std::size_t>& which, int chunk, bool together) {
             std::vector<char> failed(which.size(), 0);
+            // The box QPs factor with the BLAS: side by side only if each call then runs on its own
+            // thread (a count the user set above one would queue them); the other parts use the
+            // BLAS only in a rare fallback.
             std::optional<detail::OneBlasThread> blas;
-            if (together) together = blas.emplace().serial();
+            if (together && !blas.emplace().serial() && o_.clamp_half_width) together = false;
 #pragma omp parallel for schedule(dynamic, chunk) if (together)
             for (std::size_t k = 0; k < which.size(); ++k) {
                 try {
