@@ -78,13 +78,14 @@ void CholeskyFactor::analyse(const Eigen::SparseMatrix<double>& lower) {
     }
     if (factor_ == nullptr) throw Error("Ambrosio-Tortorelli: CHOLMOD could not analyse the " + name_ + "-matrix");
     nonzeros_ = common_.lnz;
+    flops_ = common_.fl;
 }
 
 void CholeskyFactor::factorize(const Eigen::SparseMatrix<double>& lower) {
     analyse(lower);
     cholmod_sparse A = lower_view(lower);
     factorized_ = false;
-    detail::use_blas_threads();
+    detail::use_blas_threads_for(flops_);
     cholmod_factorize(&A, factor_, &common_);
     if (common_.status != CHOLMOD_OK || factor_->minor != factor_->n)
         throw Error("Ambrosio-Tortorelli: CHOLMOD could not factor the " + name_ + "-matrix (not positive definite)");

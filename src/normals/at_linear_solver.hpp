@@ -47,6 +47,7 @@ private:
     mutable cholmod_dense *x_ = nullptr, *y_ = nullptr, *e_ = nullptr;  ///< cholmod_solve2 workspace
     bool factorized_ = false;
     double nonzeros_ = 0;
+    double flops_ = 0;  ///< of the factorization, from the analysis
 };
 
 /// Solves K X = B for a sequence of matrices K of one pattern (one per AT round). A new K is

@@ -26,11 +26,23 @@ const OpenBlas& open_blas() {
 
 }  // namespace
 
-void use_blas_threads() {
+namespace {
+
+void set_blas_threads(int wanted) {
     const OpenBlas& blas = open_blas();
     if (!blas.get || !blas.set || blas.user_choice || omp_in_parallel()) return;
-    const int wanted = std::max(1, std::min(omp_get_max_threads(), omp_get_num_procs()));
     if (blas.get() != wanted) blas.set(wanted);
+}
+
+}  // namespace
+
+void use_blas_threads() { set_blas_threads(std::max(1, std::min(omp_get_max_threads(), omp_get_num_procs()))); }
+
+void use_blas_threads_for(double flops) {
+    if (flops < kThreadedBlasMinFlops)
+        set_blas_threads(1);
+    else
+        use_blas_threads();
 }
 
 OneBlasThread::OneBlasThread() {

@@ -98,9 +98,9 @@ public:
     explicit PatternFactorizer(const SparseMatrix& R) : R_(R), diagonal_(R.diagonal()) {
         R_.makeCompressed();
         work_ = R_;
-        detail::use_blas_threads();
         cholesky_.analyzePattern(R_);
         if (cholesky_.info() != Eigen::Success) throw Error("box QP: CHOLMOD could not analyze the matrix");
+        flops_ = cholesky_.cholmod().fl;
     }
 
     /// Factorizes R + ρI.
@@ -138,7 +138,7 @@ public:
 
 private:
     void factorize(const SparseMatrix& matrix, const std::string& what) {
-        detail::use_blas_threads();
+        detail::use_blas_threads_for(flops_);
         cholesky_.factorize(matrix);
         ++factorizations_;
         if (cholesky_.info() != Eigen::Success) throw Error("box QP: CHOLMOD could not factor " + what + " (not positive definite)");
@@ -148,6 +148,7 @@ private:
     SparseMatrix work_;  ///< same pattern as R_, masked values
     Eigen::VectorXd diagonal_;
     Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lower> cholesky_;
+    double flops_ = 0;  ///< of a factorization (the analysis's count; every one has the pattern of R)
     int factorizations_ = 0;
 };
 

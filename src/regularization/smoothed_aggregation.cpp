@@ -369,8 +369,7 @@ SmoothedAggregation<Scalar>::SmoothedAggregation(Matrix filtered_fine, double fi
 template <class Scalar>
 void SmoothedAggregation<Scalar>::factor_coarsest(const Eigen::SparseMatrix<double>& matrix) {
     coarsest_ = std::make_unique<Coarsest>();
-    use_blas_threads();
-    coarsest_->cholesky.compute(matrix);
+    factorize_with_cholmod(coarsest_->cholesky, matrix);
     if (coarsest_->cholesky.info() != Eigen::Success)
         throw Error("algebraic multigrid: the coarsest level is not positive definite (alpha must be > 0)");
 }
@@ -517,8 +516,7 @@ void SmoothedAggregation<Scalar>::hold_coarse_levels() {
     for (std::size_t index = 1;; ++index) {
         symmetrize(op);
         if (index + 1 == levels_.size()) {
-            use_blas_threads();
-            coarse->coarsest.cholesky.compute(op.to_scalar());
+            factorize_with_cholmod(coarse->coarsest.cholesky, op.to_scalar());
             if (coarse->coarsest.cholesky.info() != Eigen::Success)
                 throw Error("algebraic multigrid: the coarse operator of the free coordinates is not positive definite");
             break;

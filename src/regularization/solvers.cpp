@@ -33,10 +33,9 @@ std::string format_number(const char* format, double value) {
 }
 
 SolveReport solve_cholmod(const detail::SpdSystem& system, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
-    detail::use_blas_threads();
     const Eigen::SparseMatrix<double>& R = system.matrix();
     Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
-    llt.compute(R);
+    detail::factorize_with_cholmod(llt, R);
     if (llt.info() != Eigen::Success)
         throw Error("CHOLMOD could not factor the regularization matrix: it is not positive definite (alpha must be > 0)");
     x = llt.solve(b);
