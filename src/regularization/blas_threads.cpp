@@ -24,10 +24,7 @@ const OpenBlas& open_blas() {
     return blas;
 }
 
-}  // namespace
-
-namespace {
-
+/// Unless the user chose the count, inside a parallel region, or the BLAS is not OpenBLAS.
 void set_blas_threads(int wanted) {
     const OpenBlas& blas = open_blas();
     if (!blas.get || !blas.set || blas.user_choice || omp_in_parallel()) return;
