@@ -331,17 +331,35 @@ TEST(ValidityRepair, NoisyRandomBlobsComeOutValid) {
     EXPECT_GT(invalid_before, 0);  // the noise does make the solve fold
 }
 
+/// A random volume (45 % of its voxels set) of side^3 voxels with a random unit field: its
+/// clamped solve folds.
+struct ClampedFold {
+    BinaryVolume volume;
+    DigitalSurface surface;
+    PointMatrix field;
+    ClampedRegularizationResult clamped;
+
+    ClampedFold(std::int64_t side, unsigned seed) {
+        std::mt19937 rng(seed);
+        std::bernoulli_distribution coin(0.45);
+        volume = test::make_volume({side, side, side}, [&](double, double, double) { return coin(rng); });
+        surface = extract_digital_surface(volume, Connectivity::TwentySix);
+        std::normal_distribution<double> normal(0, 1);
+        field.resize(surface.face_count(), 3);
+        for (std::int64_t f = 0; f < surface.face_count(); ++f)
+            field.row(f) = Eigen::RowVector3d(normal(rng), normal(rng), normal(rng)).normalized();
+        clamped = regularize_clamped(surface, field, RegularizationWeights{});
+    }
+};
+
 TEST(ValidityRepair, TheReversibleModeStaysReversible) {
     // A random field makes the clamped solve fold; the repair keeps every vertex in its clamp box,
     // so the mesh still re-digitizes to the input.
-    std::mt19937 rng(5);
-    std::bernoulli_distribution coin(0.45);
-    const BinaryVolume volume = test::make_volume({9, 9, 9}, [&](double, double, double) { return coin(rng); });
-    const DigitalSurface s = extract_digital_surface(volume, Connectivity::TwentySix);
-    std::normal_distribution<double> normal(0, 1);
-    PointMatrix u(s.face_count(), 3);
-    for (std::int64_t f = 0; f < s.face_count(); ++f) u.row(f) = Eigen::RowVector3d(normal(rng), normal(rng), normal(rng)).normalized();
-    const ClampedRegularizationResult clamped = regularize_clamped(s, u, RegularizationWeights{});
+    const ClampedFold fold(9, 5);
+    const BinaryVolume& volume = fold.volume;
+    const DigitalSurface& s = fold.surface;
+    const PointMatrix& u = fold.field;
+    const ClampedRegularizationResult& clamped = fold.clamped;
     ValidityRepairOptions options;
     options.clamp_half_width = 0.499;
     const ValidityRepairResult r = repair_validity(s, u, RegularizationWeights{}, clamped.positions, options);
@@ -360,21 +378,14 @@ TEST(ValidityRepair, TheReversibleModesPartsSideBySideReachWhatOneThreadReaches)
     // a round are solved side by side, each with the BLAS at one thread. They share no unknown, so
     // the repair must take the same course as at one thread and end at the same positions (to
     // the rounding of the factorizations).
-    std::mt19937 rng(11);
-    std::bernoulli_distribution coin(0.45);
-    const BinaryVolume volume = test::make_volume({10, 10, 10}, [&](double, double, double) { return coin(rng); });
-    const DigitalSurface s = extract_digital_surface(volume, Connectivity::TwentySix);
-    std::normal_distribution<double> normal(0, 1);
-    PointMatrix u(s.face_count(), 3);
-    for (std::int64_t f = 0; f < s.face_count(); ++f) u.row(f) = Eigen::RowVector3d(normal(rng), normal(rng), normal(rng)).normalized();
-    const ClampedRegularizationResult clamped = regularize_clamped(s, u, RegularizationWeights{});
+    const ClampedFold fold(10, 11);
     ValidityRepairOptions options;
     options.clamp_half_width = 0.499;
     const int threads = omp_get_max_threads();
     std::vector<ValidityRepairResult> runs;
     for (const int count : {1, 2}) {
         omp_set_num_threads(count);
-        runs.push_back(repair_validity(s, u, RegularizationWeights{}, clamped.positions, options));
+        runs.push_back(repair_validity(fold.surface, fold.field, RegularizationWeights{}, fold.clamped.positions, options));
     }
     omp_set_num_threads(threads);
     ASSERT_GT(runs[0].report.parts_solved, 2 * runs[0].report.rounds) << "the test needs rounds of several parts";

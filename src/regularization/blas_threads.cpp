@@ -44,17 +44,14 @@ void use_blas_threads_for(double flops) {
 
 OneBlasThread::OneBlasThread() {
     const OpenBlas& blas = open_blas();
-    if (!blas.get || !blas.set) {
-        serial_ = true;
+    if (!blas.get) {
+        serial_ = true;  // another BLAS: reentrant, and not dsreg's to set
         return;
     }
-    if (blas.user_choice || omp_in_parallel()) {
-        serial_ = blas.get() == 1;
-        return;
-    }
-    changed_ = blas.get() != 1;
-    if (changed_) blas.set(1);
-    serial_ = true;
+    const bool was_serial = blas.get() == 1;
+    set_blas_threads(1);
+    serial_ = blas.get() == 1;
+    changed_ = serial_ && !was_serial;
 }
 
 OneBlasThread::~OneBlasThread() {
