@@ -423,6 +423,20 @@ TEST(MedicalIo, TiffTagsItkCopiesUnsafelyAreRefusedBeforeItkReadsThem) {
     put16(long_text, entry + 4, 0), put16(long_text, entry + 6, 0x6b6c);
     write_bytes(scratch.path("long-text.tif"), long_text);
     expect_refused(scratch.path("long-text.tif"), "directory 1: tag 305 claims 1802240000 values, more than the file holds");
+    // The same long Software tag in a last directory the file ends right after: its entries are
+    // whole, the offset of a next directory is cut off, and libtiff reads it (found by fuzzing).
+    const auto u16 = [&](std::size_t at) { return std::size_t(std::uint8_t(bytes[at]) | std::uint8_t(bytes[at + 1]) << 8); };
+    const auto u32 = [&](std::size_t at) { return u16(at) | u16(at + 2) << 16; };
+    std::size_t last = u32(4), next_field = 4;
+    while (u32(last + 2 + 12 * u16(last)) != 0) next_field = last + 2 + 12 * u16(last), last = u32(next_field);
+    ASSERT_NE(next_field, 4u) << "ITK's writer no longer writes one directory per slice";
+    std::string cut_short = bytes;
+    const std::size_t copy = cut_short.size(), software_entry = tiff_tag_value_offset(bytes, 3, 305) - 8;
+    cut_short += bytes.substr(last, 2 + 12 * u16(last));  // the last directory again, without its next offset
+    put16(cut_short, copy + (software_entry - last) + 4, 0x000f), put16(cut_short, copy + (software_entry - last) + 6, 0x6c00);
+    put16(cut_short, next_field, std::uint16_t(copy & 0xffff)), put16(cut_short, next_field + 2, std::uint16_t(copy >> 16));
+    write_bytes(scratch.path("cut-short.tif"), cut_short);
+    expect_refused(scratch.path("cut-short.tif"), "directory 4: tag 305 claims 1811939343 values, more than the file holds");
     std::string one_byte = bytes;  // an unknown tag 65000, one byte of text without a NUL
     put16(one_byte, entry, 65000), put16(one_byte, entry + 4, 1), put16(one_byte, entry + 8, 1);
     write_bytes(scratch.path("one-byte.tif"), one_byte);

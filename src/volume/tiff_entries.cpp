@@ -69,9 +69,11 @@ std::uint64_t check_directory(InputFile& file, const TiffLayout& layout, std::ui
     if (count_field.empty()) return 0;
     const std::uint64_t entries = layout.number(count_field, 0, layout.count_bytes());
     if (entries > (std::uint64_t(1) << 20)) return 0;
-    const std::vector<std::uint8_t> table =
-        bytes_at(file, offset + layout.count_bytes(), entries * layout.entry_bytes() + layout.offset_bytes());
-    if (table.empty()) return 0;
+    // libtiff reads a directory whose entries are whole even when the file ends before the offset
+    // of the next one (a truncated stack: it takes "no next directory"), so those are checked too.
+    const std::uint64_t table_offset = offset + layout.count_bytes(), entry_bytes = entries * layout.entry_bytes();
+    const std::vector<std::uint8_t> table = bytes_at(file, table_offset, entry_bytes);
+    if (table.size() != entry_bytes || entries == 0) return 0;
     for (std::uint64_t e = 0; e < entries; ++e) {
         const std::size_t at = static_cast<std::size_t>(e * layout.entry_bytes());
         const std::uint64_t tag = layout.number(table, at, 2), type_bytes = tiff_type_bytes(layout.number(table, at + 2, 2));
@@ -82,7 +84,8 @@ std::uint64_t check_directory(InputFile& file, const TiffLayout& layout, std::ui
             file.fail("directory " + std::to_string(index) + ": tag " + std::to_string(tag) + " claims " + std::to_string(count) +
                       " values, more than the file holds at their offset " + std::to_string(values));
     }
-    return layout.number(table, static_cast<std::size_t>(entries * layout.entry_bytes()), layout.offset_bytes());
+    const std::vector<std::uint8_t> next = bytes_at(file, table_offset + entry_bytes, layout.offset_bytes());
+    return next.empty() ? 0 : layout.number(next, 0, layout.offset_bytes());
 }
 
 }  // namespace
