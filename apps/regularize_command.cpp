@@ -134,6 +134,15 @@ void add_regularization_extension_options(CLI::App& command, RegularizationExten
                        "Noisy voxels: the fairness of a vertex where a share rho of the faces around it have an estimated "
                        "normal pointing into the object is weighted 1 + G min(1, rho/0.02)^2 (docs/accuracy.md); 0 = off. "
                        "Default 12");
+    command.add_option("--junction-turn-share", o.junction_turn_share,
+                       "Label maps: each turn of a junction curve is asked to keep this share of its digital offset from "
+                       "the chord of its two neighbours on the curve (a fairness target), so that the sliver between the "
+                       "curve and its staircase does not fold (docs/multi-label.md, 'Turns of junction curves'); 0 = off "
+                       "(the chord). Default 0.55")
+        ->check(CLI::Range(0.0, 1.0));
+    command.add_option("--junction-turn-weight", o.junction_turn_weight,
+                       "Label maps: the least weight of those turns' fairness, relative to beta (the alignment of the "
+                       "sheets meeting there, which the held turn works against). Default 0.3");
     command.add_option("--metric", o.metric, "Metrics W0, W2: identity (paper) or area (estimated face and dual vertex areas)")
         ->check(CLI::IsMember(metric_names()))
         ->capture_default_str();

@@ -151,6 +151,9 @@ int accuracy(const std::vector<double>& steps) {
             std::vector<Row> rows;
             rows.push_back(errors_row("digital surface", shape, s, s.vertices, h));
             rows.push_back(errors_row("**joint (default)**", shape, s, result.regularization.positions, h));
+            PipelineOptions chords = options;  // the turns of junction curves not held outside their chords
+            chords.extensions.junction_turn_share = 0.0;
+            rows.push_back(errors_row("joint, --junction-turn-share 0", shape, s, run_pipeline(loaded, chords).regularization.positions, h));
             const PointMatrix& indicator_ii = result.field.adaptive->normals;  // before the interface normals
             rows.push_back(errors_row("joint, II of the inner label everywhere", shape, s, regularize_with(s, fairness_links(s), indicator_ii), h));
             rows.push_back(errors_row("joint, quad links (no junction fairness)", shape, s,

@@ -281,6 +281,44 @@ TEST(LabelSurface, JunctionTurnsAreTheCornersOfAnInterfaceRectangle) {
     }
 }
 
+TEST(LabelSurface, JunctionTurnTargetsPointOutOfTheChordAtTheTurnsOnly) {
+    // The interface rectangle of two boxes (as above), on an anisotropic grid: its four corners are
+    // the turns, each linked to its two neighbours on the curve; the target is `share` times the
+    // corner's offset from their chord's middle, half the face diagonal, pointing out of the
+    // rectangle. Every other vertex gets none, and a binary surface no targets at all.
+    LabelVolume labels = test::make_labels({6, 5, 5}, [](std::int64_t i, std::int64_t j, std::int64_t k) -> std::int64_t {
+        if (j < 1 || j > 3 || k < 1 || k > 3 || i < 1 || i > 4) return 0;
+        return i <= 2 ? 1 : 2;
+    });
+    labels.grid.spacing = {0.5, 0.75, 1.25};
+    const DigitalSurface complex = extract_digital_surface(labels, Connectivity::TwentySix);
+    const ComplexEdges edges = complex_edges(complex);
+    const VertexLinks links = fairness_links(complex, edges);
+    const std::vector<char> turn = junction_turn_vertices(complex, edges);
+    const double share = 0.55;
+    const PointMatrix targets = junction_turn_targets(complex, edges, links, share);
+    ASSERT_EQ(targets.rows(), complex.vertex_count());
+    Eigen::RowVector3d centre = Eigen::RowVector3d::Zero();
+    for (std::int32_t v = 0; v < complex.vertex_count(); ++v)
+        if (turn[std::size_t(v)]) centre += 0.25 * complex.vertices.row(v);
+    std::int64_t with_target = 0;
+    for (std::int32_t v = 0; v < complex.vertex_count(); ++v) {
+        if (!turn[std::size_t(v)]) {
+            EXPECT_TRUE(targets.row(v).isZero(0.0)) << "vertex at " << complex.vertex_pointels.row(v);
+            continue;
+        }
+        ++with_target;
+        ASSERT_EQ(links.size(v), 2);
+        const Eigen::RowVector3d t = targets.row(v), out = complex.vertices.row(v) - centre;
+        EXPECT_EQ(t[0], 0.0);  // in the interface plane x = const
+        EXPECT_NEAR(t[1], std::copysign(share * 0.5 * 0.75, out[1]), 1e-12);
+        EXPECT_NEAR(t[2], std::copysign(share * 0.5 * 1.25, out[2]), 1e-12);
+    }
+    EXPECT_EQ(with_target, 4);
+    const DigitalSurface binary = extract_digital_surface(test::indicator(labels, 1), Connectivity::TwentySix);
+    EXPECT_EQ(junction_turn_targets(binary, complex_edges(binary), fairness_links(binary), share).rows(), 0);
+}
+
 TEST(LabelSurface, JunctionCurveIsSmoothedAlongItsLengthOnly) {
     // Three labels meeting along the line x = y = 4 (pointels), z through the whole grid.
     const LabelVolume labels = test::make_labels({8, 8, 6}, [](std::int64_t i, std::int64_t j, std::int64_t) -> std::int64_t {

@@ -2,6 +2,8 @@
 // regularization of anisotropic grids in physical coordinates.
 #include <gtest/gtest.h>
 
+#include <Eigen/Cholesky>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -152,6 +154,10 @@ TEST(LocalWeights, MatrixEnergyEqualsTermByTermEnergy) {
     w.vertex_gamma = random_vector(b.surface.vertex_count());
     w.face_beta[0] = 0;  // β_f = 0 and γ_i = 0 are allowed
     w.vertex_gamma[3] = 0;
+    w.fairness_targets = PointMatrix::Zero(b.surface.vertex_count(), 3);  // a target at every fifth vertex
+    std::uniform_real_distribution<double> offset(-0.4, 0.4);
+    for (std::int64_t i = 0; i < b.surface.vertex_count(); i += 5)
+        w.fairness_targets.row(i) << offset(rng), offset(rng), offset(rng);
     const RegularizationSystem s = assemble_regularization_system(b.surface.vertices, b.surface.quads, b.links, b.normals, w);
     std::uniform_real_distribution<double> jitter(-0.7, 0.7);
     for (int trial = 0; trial < 3; ++trial) {
@@ -168,7 +174,7 @@ TEST(LocalWeights, MatrixEnergyEqualsTermByTermEnergy) {
             for (std::int64_t k = b.links.offsets[std::size_t(i)]; k < b.links.offsets[std::size_t(i + 1)]; ++k)
                 mean += q.row(b.links.neighbors[std::size_t(k)]);
             mean /= double(b.links.size(i));
-            fairness += w.vertex_gamma[i] * w.vertex_weights[i] * (q.row(i) - mean).squaredNorm();
+            fairness += w.vertex_gamma[i] * w.vertex_weights[i] * (q.row(i) - mean - w.fairness_targets.row(i)).squaredNorm();
         }
         for (std::int64_t f = 0; f < b.surface.face_count(); ++f)
             for (int e = 0; e < 4; ++e) {
@@ -180,6 +186,59 @@ TEST(LocalWeights, MatrixEnergyEqualsTermByTermEnergy) {
         EXPECT_NEAR(terms.fairness, fairness, 1e-10 * fairness);
         EXPECT_NEAR(by_matrix, terms.total(w), 1e-9 * terms.total(w));
     }
+}
+
+TEST(LocalWeights, FairnessTargetsAreMetByEverySolverAlike) {
+    // A target t_i moves the minimizer so that the fairness residual p̂_i − mean(links) leans
+    // towards t_i; the matrix-free multigrid, CHOLMOD and the assembled system solved densely by
+    // Eigen must agree on that minimizer (each solver reads b from the same place, not R).
+    const Ball b = small_ball();
+    const std::int64_t n = b.surface.vertex_count();
+    RegularizationWeights w{3e-3, 1.0, 3e-2, {}, {}};
+    w.vertex_gamma = Eigen::VectorXd::Ones(n);
+    w.fairness_targets = PointMatrix::Zero(n, 3);
+    std::vector<std::int64_t> targeted;
+    const Eigen::RowVector3d centre = b.surface.vertices.colwise().mean();
+    for (std::int64_t i = 0; i < n; i += 7) {
+        w.vertex_gamma[i] = 3;  // as strong as the label pipeline makes the turns of junction curves
+        w.fairness_targets.row(i) = 0.2 * (b.surface.vertices.row(i) - centre).normalized();  // outwards
+        targeted.push_back(i);
+    }
+    const RegularizationSystem system = assemble_regularization_system(b.surface.vertices, b.surface.quads, b.links, b.normals, w);
+    const Eigen::VectorXd dense = Eigen::MatrixXd(system.matrix).ldlt().solve(system.rhs);
+    SolverOptions amg;
+    amg.kind = SolverKind::Amg;
+    amg.max_error = 1e-9;
+    SolverOptions cholmod;
+    cholmod.kind = SolverKind::Cholmod;
+    for (const SolverOptions& o : {amg, cholmod}) {
+        const RegularizationResult r = regularize(b.surface, b.normals, w, o);
+        EXPECT_LT((flatten_points(r.positions) - dense).lpNorm<Eigen::Infinity>(), 1e-7) << solver_name(o.kind);
+    }
+    RegularizationWeights untargeted = w;
+    untargeted.fairness_targets.resize(0, 3);
+    const PointMatrix with = regularize(b.surface, b.normals, w, cholmod).positions;
+    const PointMatrix without = regularize(b.surface, b.normals, untargeted, cholmod).positions;
+    // Each solution minimizes its own energy: E_t(with) ≤ E_t(without) and E_0(without) ≤ E_0(with),
+    // with E_t = E_0 − 2 γ Σ c_i t_i·r_i + const (r_i the fairness residual); summed, they give
+    // Σ c_i t_i·(r_i(with) − r_i(without)) ≥ 0, strictly for R positive definite. The targeted
+    // vertices share c_i and |t_i|, so the residuals' gain along t_i sums to a positive number
+    // (a wrong sign or factor in b breaks it; the alignment term keeps it small on this ball).
+    double towards = 0;
+    for (const std::int64_t i : targeted) {
+        const auto residual = [&](const PointMatrix& p) {
+            Eigen::RowVector3d mean = Eigen::RowVector3d::Zero();
+            for (std::int64_t k = b.links.offsets[std::size_t(i)]; k < b.links.offsets[std::size_t(i + 1)]; ++k)
+                mean += p.row(b.links.neighbors[std::size_t(k)]);
+            return Eigen::RowVector3d(p.row(i) - mean / double(b.links.size(i)));
+        };
+        towards += (residual(with) - residual(without)).dot(w.fairness_targets.row(i).normalized());
+    }
+    EXPECT_GT(towards, 0.0);
+    w.fairness_targets(0, 1) = std::nan("");
+    EXPECT_THROW(validate_weights(w, n, b.surface.face_count()), Error);
+    w.fairness_targets.resize(n - 1, 3);
+    EXPECT_THROW(validate_weights(w, n, b.surface.face_count()), Error);
 }
 
 TEST(LocalWeights, HugeAlphaPinsARegion) {

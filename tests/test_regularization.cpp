@@ -207,7 +207,7 @@ TEST(Regularization, EnergyAndRightHandSideAreTheSameBitsAtEveryThreadCount) {
     for (int t = 1; t <= 4; ++t) {
         omp_set_num_threads(t);
         energies.push_back(regularization_energy(q, s.vertices, s.quads, links, u, w));
-        constants.push_back(regularization_right_hand_side(q, w).constant);
+        constants.push_back(regularization_right_hand_side(q, links, w).constant);
     }
     omp_set_num_threads(threads);
     for (std::size_t k = 1; k < energies.size(); ++k) {

@@ -48,6 +48,15 @@ Junctions find_junctions(const DigitalSurface& surface, const ComplexEdges& edge
 /// ends a little on the inner side (docs/multi-label.md, "Validity"). None on a binary volume.
 std::vector<char> junction_turn_vertices(const DigitalSurface& surface, const ComplexEdges& edges);
 
+/// Fairness targets (RegularizationWeights::fairness_targets) that hold each turn of a junction
+/// curve on the outer side of its chord (docs/multi-label.md, "Turns of junction curves"): at a
+/// turn vertex j₂ (junction_turn_vertices) whose fairness links are its two neighbours j₁, j₃
+/// along the curve, t = share · (p_j₂ − (p_j₁ + p_j₃)/2) at the digital positions p (physical
+/// units: half a face diagonal times `share`); a zero row elsewhere. share = 0 asks for the chord
+/// (the fairness as it is), 1 for the staircase's corner. Empty on a binary surface.
+PointMatrix junction_turn_targets(const DigitalSurface& surface, const ComplexEdges& edges, const VertexLinks& links,
+                                  double share);
+
 /// Links of the fairness term (eq. 11–14) on the complex, one neighbour per edge:
 ///  * a vertex inside one interface: every edge (for a manifold complex, e.g. any binary
 ///    volume, exactly vertex_links(quads), in the same order);

@@ -249,6 +249,14 @@ struct RegularizationExtensions {
     /// of the faces around a vertex point against their surfel (noise_fairness_gamma,
     /// local_weights.hpp); unset = 12; 0 = off. Multiplies --gamma-map / --gamma-file.
     std::optional<double> noise_fairness;
+    /// --junction-turn-share: on a label map, the share of its digital offset from the chord j₁j₃
+    /// that each turn j₂ of a junction curve is asked to keep, through a fairness target
+    /// (junction_turn_targets, label_surface.hpp; docs/multi-label.md): it keeps the turn's corner
+    /// triangle from folding; unset = 0.55; 0 = off (the fairness straightens the curve to its chords).
+    std::optional<double> junction_turn_share;
+    /// --junction-turn-weight: the least weight of those turns' fairness, relative to β (their
+    /// γ_i is raised to at least this × β/γ); unset = 0.3.
+    std::optional<double> junction_turn_weight;
     std::string alpha_map, beta_map, gamma_map;     ///< scalar volumes on the input grid
     std::string alpha_file, beta_file, gamma_file;  ///< text files, one value per vertex (face for beta)
     RawVolumeLayout map_raw_layout;  ///< value type, byte order and header of .raw maps (dims: the input's)

@@ -5,9 +5,10 @@
 //
 //   E(p̂) = α Σ_i α_i w0_i |p̂_i − p_i|²                                (data attachment, eq. 3)
 //        + β Σ_f β_f w2_f Σ_{edges (a,b) of f} ((p̂_a − p̂_b)·u_f)²       (alignment, eq. 5–10)
-//        + γ Σ_i γ_i w0_i |p̂_i − mean_{j ∈ link(i)} p̂_j|²                (fairness, eq. 11–14)
+//        + γ Σ_i γ_i w0_i |p̂_i − mean_{j ∈ link(i)} p̂_j − t_i|²          (fairness, eq. 11–14)
 //
-// and its minimizer solves R p* = α W0_α p (eq. 22–23, with W0_α = diag(α_i w0_i)). w0_i, w2_f
+// and its minimizer solves R p* = α W0_α p + γ Lᵀ Γ t (eq. 22–23, with W0_α = diag(α_i w0_i); the
+// fairness targets t_i are 0 in the paper, so the second part vanishes there). w0_i, w2_f
 // are the metrics W0, W2 of §3.4 (identity by default; area metrics in
 // regularization_metrics.hpp); α_i, β_f, γ_i are optional local multipliers of the three global
 // weights (beyond the paper; 1 by default). Vectors of unknowns are interleaved: entry 3i + d is
@@ -39,14 +40,20 @@ struct RegularizationWeights {
     Eigen::VectorXd vertex_alpha{};  ///< α_i of the data term, one per vertex, each > 0
     Eigen::VectorXd face_beta{};     ///< β_f of the alignment term, one per face, each ≥ 0
     Eigen::VectorXd vertex_gamma{};  ///< γ_i of the fairness term, one per vertex, each ≥ 0
+    /// t_i, the offset the fairness term asks of p̂_i from the mean of its links (n×3, physical
+    /// units, finite; empty = 0 everywhere, the paper's). Ignored at vertices without links. The
+    /// label pipeline sets it at the turns of junction curves (junction_turn_targets,
+    /// label_surface.hpp); it changes b, not R.
+    PointMatrix fairness_targets{};
 };
 
 /// The sparse quadratic problem R x = b, with R symmetric positive definite (3n×3n, both
-/// triangles stored) and b = α W0_α p (W0_α = diag(α_i w0_i)).
+/// triangles stored) and b = α W0_α p + γ Lᵀ Γ t (W0_α = diag(α_i w0_i), Γ = diag(γ_i w0_i),
+/// L the fairness rows x_i − mean_{j ∈ link(i)} x_j, t the fairness targets).
 struct RegularizationSystem {
     Eigen::SparseMatrix<double> matrix;
     Eigen::VectorXd rhs;
-    double constant = 0;  ///< α pᵀ W0 p, so that E(x) = xᵀ R x − 2 bᵀ x + constant
+    double constant = 0;  ///< α pᵀ W0_α p + γ tᵀ Γ t, so that E(x) = xᵀ R x − 2 bᵀ x + constant
 };
 
 /// The three sums of eq. (1) at positions p̂ without the global α, β, γ (W0, W2 and the local
@@ -59,8 +66,8 @@ struct EnergyTerms {
 };
 
 /// Checks the weights: α > 0, β ≥ 0, γ ≥ 0, all finite; W0, W2 and α_i positive, β_f and γ_i
-/// non-negative, each finite and of the right size (or empty). Throws dsreg::Error naming the
-/// offending parameter (and element).
+/// non-negative, each finite and of the right size (or empty); fairness targets finite, one row
+/// per vertex (or none). Throws dsreg::Error naming the offending parameter (and element).
 void validate_weights(const RegularizationWeights& weights, std::int64_t vertex_count, std::int64_t face_count);
 
 /// Assembles R and b of eq. (22–23) for the quad mesh (vertices p, faces, links) and the field u.
@@ -69,8 +76,9 @@ RegularizationSystem assemble_regularization_system(const PointMatrix& positions
                                                      const RegularizationWeights& weights);
 
 /// b and the constant of that system without R (its matrix left empty): for solvers that apply R
-/// without assembling it.
-RegularizationSystem regularization_right_hand_side(const PointMatrix& positions, const RegularizationWeights& weights);
+/// without assembling it. The links are read only where the weights hold fairness targets.
+RegularizationSystem regularization_right_hand_side(const PointMatrix& positions, const VertexLinks& links,
+                                                    const RegularizationWeights& weights);
 
 /// α · min_i α_i w0_i: the data term alone bounds the smallest eigenvalue of R from below (R is
 /// αW0_α ⊗ I3 plus positive semi-definite terms, eq. 25).

@@ -110,6 +110,7 @@ SubMesh internal_terms(const BlockStages& b, const std::vector<char>& face_selec
     for (std::size_t i = 0; i < m.vertices.size(); ++i)
         if (!whole_link[std::size_t(m.vertices[i])]) gamma[std::int64_t(i)] = 0;
     m.weights.vertex_gamma = gamma;
+    if (w.fairness_targets.rows() > 0) m.weights.fairness_targets = w.fairness_targets(m.vertices, Eigen::all);
     return m;
 }
 
@@ -185,7 +186,7 @@ BlockStages run_block_stages(const VolumeSource& source, const BlockPlan& plan, 
         b.system = assembly == BlockAssembly::matrix_and_rhs
                        ? assemble_regularization_system(s.vertices, s.quads, vertex_links(s.quads, s.vertex_count()),
                                                         b.field.normals, b.weights)
-                       : regularization_right_hand_side(s.vertices, b.weights);
+                       : regularization_right_hand_side(s.vertices, VertexLinks{}, b.weights);  // binary: no fairness targets
         clock.finish();
     }
     b.read_seconds = stage_time(clock, "read");

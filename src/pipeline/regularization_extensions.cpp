@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 
@@ -20,6 +21,12 @@ namespace {
 constexpr double kDefaultNoiseFairness = 12;
 constexpr double kNoiseFullShare = 0.02;
 constexpr int kNoiseRings = 3;
+
+/// --junction-turn-share and --junction-turn-weight when unset (docs/multi-label.md, "Turns of
+/// junction curves"): a turn held 0.39 voxel outside its chord (0.55 of the staircase's 0.71),
+/// its fairness weighing at least 0.3 β (10 γ with the default weights).
+constexpr double kDefaultJunctionTurnShare = 0.55;
+constexpr double kDefaultJunctionTurnWeight = 0.3;
 
 /// Where one local multiplier comes from.
 struct WeightSource {
@@ -146,6 +153,10 @@ void check_regularization_extensions(const RegularizationExtensions& o) {
         throw Error("--alpha-reach-sheet must be zero (no weight on sheets) or positive");
     if (o.noise_fairness && (!(*o.noise_fairness >= 0) || !std::isfinite(*o.noise_fairness)))
         throw Error("--noise-fairness must be zero (off) or positive");
+    if (o.junction_turn_share && (!(*o.junction_turn_share >= 0) || !(*o.junction_turn_share <= 1)))
+        throw Error("--junction-turn-share must be between 0 (off: the chord) and 1 (the staircase's corner)");
+    if (o.junction_turn_weight && (!(*o.junction_turn_weight >= 0) || !std::isfinite(*o.junction_turn_weight)))
+        throw Error("--junction-turn-weight must be zero or positive");
     if (o.shrink_correction && *o.shrink_correction < 0) throw Error("--shrink-correction must be 0 (off) or positive");
     if (o.shrink_local_steps && *o.shrink_local_steps < 0) throw Error("--shrink-local-steps must be 0 (off) or positive");
     if (o.shrink_correction && *o.shrink_correction > 0 && o.clamp)
@@ -175,6 +186,28 @@ Eigen::VectorXd local_shrink_share(const DigitalSurface& surface, const Eigen::V
     return share;
 }
 
+namespace {
+
+/// The fairness targets and multipliers of the turns of junction curves (label maps only).
+void hold_junction_turns(const RegularizationExtensions& o, const DigitalSurface& surface, RegularizationWeights& weights) {
+    const double share = o.junction_turn_share.value_or(kDefaultJunctionTurnShare);
+    // Without fairness (γ = 0) there is no term to offset.
+    if (share == 0 || !(weights.gamma > 0) || surface.face_labels.size() != std::size_t(surface.face_count()) ||
+        surface.surfels.size() != std::size_t(surface.face_count()))
+        return;
+    const ComplexEdges edges = complex_edges(surface);
+    weights.fairness_targets = junction_turn_targets(surface, edges, fairness_links(surface, edges), share);
+    if (weights.fairness_targets.rows() == 0) return;
+    // The offset competes with the alignment of the sheets meeting there (β), not with the
+    // fairness elsewhere: at γ alone a turn would move about γ·δ/(2β), nothing.
+    const double least = o.junction_turn_weight.value_or(kDefaultJunctionTurnWeight) * weights.beta / weights.gamma;
+    if (weights.vertex_gamma.size() == 0) weights.vertex_gamma = Eigen::VectorXd::Ones(surface.vertex_count());
+    for (std::int64_t v = 0; v < surface.vertex_count(); ++v)
+        if (!weights.fairness_targets.row(v).isZero(0.0)) weights.vertex_gamma[v] = std::max(weights.vertex_gamma[v], least);
+}
+
+}  // namespace
+
 Eigen::VectorXd apply_regularization_extensions(const RegularizationExtensions& o, const DigitalSurface& surface,
                                                 const NormalField& field, const ThinParts& thin_parts,
                                                 RegularizationWeights& weights) {
@@ -185,6 +218,7 @@ Eigen::VectorXd apply_regularization_extensions(const RegularizationExtensions& 
     const Eigen::VectorXd noisy = noise_multipliers(o, surface, field);
     if (noisy.size() > 0)
         weights.vertex_gamma = weights.vertex_gamma.size() > 0 ? Eigen::VectorXd(weights.vertex_gamma.cwiseProduct(noisy)) : noisy;
+    hold_junction_turns(o, surface, weights);
     Eigen::VectorXd thin;
     if (thin_parts.reach.size() > 0) {
         thin = thin_part_alpha(surface, thin_parts.reach, alpha_reach(o, surface.grid), thin_parts.sheetness,
@@ -201,6 +235,10 @@ RegularizationResult run_regularization(const RegularizationExtensions& o, const
                                         nlohmann::json& report) {
     report["metric"] = o.metric;
     report["local_weights"] = local_weights_json(o, weights);
+    if (weights.fairness_targets.rows() > 0)
+        report["junction_turns"] = {{"vertices", (weights.fairness_targets.rowwise().squaredNorm().array() > 0).count()},
+                                    {"share", o.junction_turn_share.value_or(kDefaultJunctionTurnShare)},
+                                    {"weight", o.junction_turn_weight.value_or(kDefaultJunctionTurnWeight)}};
     if (!o.clamp) {
         RegularizationResult result = regularize(surface, normals, weights, solver);
         const int steps = o.shrink_correction.value_or(40);

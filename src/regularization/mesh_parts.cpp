@@ -109,6 +109,7 @@ PartMesh extract_part(const MeshPart& part, const PointMatrix& positions, const 
     mesh.weights.vertex_alpha = rows_of(w.vertex_alpha, part.vertices);
     mesh.weights.face_beta = rows_of(w.face_beta, part.faces);
     mesh.weights.vertex_gamma = rows_of(w.vertex_gamma, part.vertices);
+    if (w.fairness_targets.rows() > 0) mesh.weights.fairness_targets = w.fairness_targets(part.vertices, Eigen::all);
     return mesh;
 }
 

@@ -49,6 +49,10 @@ void validate_weights(const RegularizationWeights& w, std::int64_t vertex_count,
     check_per_element(w.vertex_alpha, vertex_count, "per-vertex alpha multipliers", Sign::Positive);
     check_per_element(w.face_beta, face_count, "per-face beta multipliers", Sign::NonNegative);
     check_per_element(w.vertex_gamma, vertex_count, "per-vertex gamma multipliers", Sign::NonNegative);
+    if (w.fairness_targets.rows() != 0 && w.fairness_targets.rows() != vertex_count)
+        throw Error("fairness targets: " + std::to_string(w.fairness_targets.rows()) + " rows given, " +
+                    std::to_string(vertex_count) + " expected");
+    if (!w.fairness_targets.allFinite()) throw Error("fairness targets: not all finite");
 }
 
 RegularizationSystem assemble_regularization_system(const PointMatrix& positions, const FaceMatrix& quads,
@@ -58,12 +62,13 @@ RegularizationSystem assemble_regularization_system(const PointMatrix& positions
     validate_weights(weights, n, quads.rows());
     if (normals.rows() != quads.rows()) throw Error("normal field has " + std::to_string(normals.rows()) +
                                                     " vectors for " + std::to_string(quads.rows()) + " faces");
-    RegularizationSystem system = regularization_right_hand_side(positions, weights);
+    RegularizationSystem system = regularization_right_hand_side(positions, links, weights);
     detail::assemble_matrix(detail::RegularizationOperator(quads, links, normals, weights, n), system.matrix);
     return system;
 }
 
-RegularizationSystem regularization_right_hand_side(const PointMatrix& positions, const RegularizationWeights& weights) {
+RegularizationSystem regularization_right_hand_side(const PointMatrix& positions, const VertexLinks& links,
+                                                    const RegularizationWeights& weights) {
     const std::int64_t n = positions.rows();
     RegularizationSystem system;
     system.rhs.resize(3 * n);
@@ -72,8 +77,36 @@ RegularizationSystem regularization_right_hand_side(const PointMatrix& positions
         for (int d = 0; d < 3; ++d) system.rhs[3 * i + d] = aw * positions(i, d);
         constant[0] += aw * positions.row(i).squaredNorm();
     })[0];
+    const detail::FairnessTargetTerms targets = detail::fairness_target_terms(links, weights, n);
+    if (targets.rhs.size() > 0) system.rhs += targets.rhs;
+    system.constant += targets.constant;
     return system;
 }
+
+namespace detail {
+
+FairnessTargetTerms fairness_target_terms(const VertexLinks& links, const RegularizationWeights& weights, std::int64_t n) {
+    FairnessTargetTerms terms;
+    if (weights.fairness_targets.rows() == 0) return terms;
+    if (static_cast<std::int64_t>(links.offsets.size()) != n + 1)
+        throw Error("fairness targets need the links of all " + std::to_string(n) + " vertices");
+    // γ c_i |L_i x − t_i|² = γ c_i (xᵀ L_iᵀ L_i x − 2 (L_iᵀ t_i)ᵀ x + |t_i|²): b gains γ c_i L_iᵀ t_i,
+    // t_i at vertex i and −t_i / k_i at each of its k_i links. Few vertices hold a target (the
+    // turns of junction curves), so one thread scatters them, in vertex order.
+    terms.rhs = Eigen::VectorXd::Zero(3 * n);
+    for (std::int64_t i = 0; i < n; ++i) {
+        const Eigen::Vector3d t = weights.fairness_targets.row(i).transpose();
+        if (links.size(i) == 0 || t.isZero(0.0)) continue;
+        const double c = weights.gamma * fairness_weight(weights, i);
+        terms.rhs.segment<3>(3 * i) += c * t;
+        for (std::int64_t q = links.offsets[std::size_t(i)]; q < links.offsets[std::size_t(i + 1)]; ++q)
+            terms.rhs.segment<3>(3 * links.neighbors[std::size_t(q)]) -= (c / double(links.size(i))) * t;
+        terms.constant += c * t.squaredNorm();
+    }
+    return terms;
+}
+
+}  // namespace detail
 
 double smallest_eigenvalue_bound(const RegularizationWeights& w, std::int64_t vertex_count) {
     double smallest = std::numeric_limits<double>::infinity();
@@ -100,6 +133,7 @@ EnergyTerms regularization_energy(const PointMatrix& candidate, const PointMatri
             barycenter += candidate.row(links.neighbors[std::size_t(q)]);
         if (links.size(i) > 0) barycenter /= double(links.size(i));
         else barycenter = candidate.row(i);
+        if (links.size(i) > 0 && weights.fairness_targets.rows() > 0) barycenter += weights.fairness_targets.row(i);
         sums[1] += fairness_weight(weights, i) * (candidate.row(i) - barycenter).squaredNorm();
     });
     const Eigen::Index k = quads.cols();

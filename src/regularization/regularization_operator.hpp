@@ -28,6 +28,14 @@ double data_weight(const RegularizationWeights& w, std::int64_t vertex);
 double fairness_weight(const RegularizationWeights& w, std::int64_t vertex);
 double alignment_weight(const RegularizationWeights& w, std::int64_t face);
 
+/// The part of b that the fairness targets give, γ Lᵀ Γ t (3n, interleaved), and their part of
+/// E's constant, γ tᵀ Γ t; an empty vector and 0 without targets (regularization.hpp).
+struct FairnessTargetTerms {
+    Eigen::VectorXd rhs;
+    double constant = 0;
+};
+FairnessTargetTerms fairness_target_terms(const VertexLinks& links, const RegularizationWeights& weights, std::int64_t vertex_count);
+
 class RegularizationOperator {
 public:
     RegularizationOperator(const FaceMatrix& quads, const VertexLinks& links, const PointMatrix& normals,

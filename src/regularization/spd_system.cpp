@@ -70,17 +70,6 @@ const Eigen::SparseMatrix<double>& OperatorSystem::matrix() const {
     return *assembled_;
 }
 
-namespace {
-
-Eigen::VectorXd data_rhs(const PointMatrix& positions, const RegularizationWeights& weights) {
-    Eigen::VectorXd b(3 * positions.rows());
-    for (Eigen::Index i = 0; i < positions.rows(); ++i)
-        b.segment<3>(3 * i) = (weights.alpha * data_weight(weights, i)) * positions.row(i).transpose();
-    return b;
-}
-
-}  // namespace
-
 SolverOptions completed_options(const SolverOptions& options, const RegularizationWeights& weights, std::int64_t vertex_count,
                                 double smallest_spacing) {
     SolverOptions o = options;
@@ -92,7 +81,7 @@ SolverOptions completed_options(const SolverOptions& options, const Regularizati
 MeshSystem::MeshSystem(const PointMatrix& positions, const FaceMatrix& quads, const VertexLinks& links, const PointMatrix& normals,
                        const RegularizationWeights& weights)
     : operator_(quads, links, normals, weights, positions.rows()),
-      rhs_(data_rhs(positions, weights)),
+      rhs_(regularization_right_hand_side(positions, links, weights).rhs),
       system_(operator_, smallest_eigenvalue_bound(weights, positions.rows())) {}
 
 }  // namespace dsreg::detail

@@ -84,6 +84,21 @@ std::vector<char> junction_turn_vertices(const DigitalSurface& surface, const Co
     return turn;
 }
 
+PointMatrix junction_turn_targets(const DigitalSurface& surface, const ComplexEdges& edges, const VertexLinks& links,
+                                  double share) {
+    const std::vector<char> turn = junction_turn_vertices(surface, edges);
+    if (std::find(turn.begin(), turn.end(), 1) == turn.end()) return {};
+    PointMatrix targets = PointMatrix::Zero(surface.vertex_count(), 3);
+    for (std::int64_t v = 0; v < surface.vertex_count(); ++v) {
+        if (!turn[std::size_t(v)] || links.size(v) != 2) continue;  // a junction point has no fairness to offset
+        const std::int64_t q = links.offsets[std::size_t(v)];
+        const Eigen::RowVector3d chord_middle =
+            0.5 * (surface.vertices.row(links.neighbors[std::size_t(q)]) + surface.vertices.row(links.neighbors[std::size_t(q + 1)]));
+        targets.row(v) = share * (surface.vertices.row(v) - chord_middle);
+    }
+    return targets;
+}
+
 VertexLinks fairness_links(const DigitalSurface& surface) {
     // Without the faces' labels and surfels (a welded block-wise surface, always binary) the
     // surface is a closed manifold: its links are the quad links.

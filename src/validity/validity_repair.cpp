@@ -144,7 +144,8 @@ public:
           in_region_(std::size_t(surface.vertex_count()), 0),
           corrected_(std::size_t(surface.face_count()), 0), changed_(std::size_t(surface.vertex_count()), 1),
           local_(std::size_t(surface.vertex_count()), -1), mark_(std::size_t(surface.vertex_count()), 0),
-          rows_(surface.quads, links_, input_field_, weights, surface.vertex_count()) {
+          rows_(surface.quads, links_, input_field_, weights, surface.vertex_count()),
+          target_rhs_(detail::fairness_target_terms(links, weights, surface.vertex_count()).rhs) {
         for (int t = 0; t < omp_get_max_threads(); ++t) row_scratch_.emplace_back(surface.vertex_count());
         faces_of_vertex_.assign(std::size_t(surface.vertex_count()), {});
         for (std::int64_t f = 0; f < surface.face_count(); ++f)
@@ -516,6 +517,7 @@ private:
             const std::int32_t v = part[k];
             const Eigen::Index r = 3 * Eigen::Index(k);
             b.segment<3>(r) = weights_.alpha * detail::data_weight(weights_, v) * surface_.vertices.row(v).transpose();
+            if (target_rhs_.size() > 0) b.segment<3>(r) += target_rhs_.segment<3>(3 * Eigen::Index(v));
             rows_.row(v, row, true);
             for (std::size_t q = 0; q < row.columns.size(); ++q) {
                 const std::int32_t c = row.columns[q];
@@ -702,6 +704,7 @@ private:
     std::vector<std::int32_t> local_;  ///< index in the part being solved, −1 elsewhere
     std::vector<char> mark_;           ///< scratch, all 0 between calls
     detail::RegularizationOperator rows_;  ///< R of E, block row by block row
+    Eigen::VectorXd target_rhs_;  ///< the fairness targets' part of b (fairness_target_terms), empty without them
     mutable std::vector<detail::RegularizationOperator::Row> row_scratch_;  ///< one per thread
     std::vector<std::int32_t>* moved_ = nullptr;
 };
