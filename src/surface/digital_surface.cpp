@@ -12,40 +12,6 @@ namespace dsreg {
 
 namespace surface_detail {
 
-/// Corner offsets (along the two tangent axes b = axis+1, c = axis+2) listed counter-clockwise
-/// seen from outside: e_b × e_c = e_axis, so (0,0),(1,0),(1,1),(0,1) turns positively around
-/// +e_axis and must be reversed for a face whose normal is −e_axis.
-constexpr int kCornerOffsets[2][4][2] = {
-    {{0, 0}, {0, 1}, {1, 1}, {1, 0}},  // sign −1
-    {{0, 0}, {1, 0}, {1, 1}, {0, 1}},  // sign +1
-};
-
-std::array<Pointel, 4> corner_pointels(const Surfel& s) {
-    const int a = s.axis, b = (a + 1) % 3, c = (a + 2) % 3;
-    const int side = s.sign > 0 ? 1 : 0;
-    std::array<Pointel, 4> corners{};
-    for (int k = 0; k < 4; ++k) {
-        Pointel p{s.voxel[0], s.voxel[1], s.voxel[2]};
-        p[a] += side;
-        p[b] += kCornerOffsets[side][k][0];
-        p[c] += kCornerOffsets[side][k][1];
-        corners[k] = p;
-    }
-    return corners;
-}
-
-int edge_between(const std::array<Pointel, 4>& corners, const Pointel& p, const Pointel& q, bool& same_direction) {
-    for (int m = 0; m < 4; ++m) {
-        const Pointel& a = corners[m];
-        const Pointel& b = corners[(m + 1) % 4];
-        if ((a == p && b == q) || (a == q && b == p)) {
-            same_direction = a == p;
-            return m;
-        }
-    }
-    return -1;
-}
-
 int label_sides(const DigitalSurface& surface) {
     for (const FaceLabels& l : surface.face_labels)
         if (l.outer != 0) return 2;
