@@ -111,9 +111,10 @@ TEST(LabelSurface, BinaryVolumeIsTheSpecialCase) {
             const DigitalSurface labels = extract_digital_surface(label_volume_from_mask(volume), c);
             expect_equal_surfaces(binary, labels);
             EXPECT_EQ(labels.label_values, (std::vector<std::int64_t>{0, 1}));
-            // The joint regularization's links are the quad links, in the same order.
+            // The joint regularization's links are the quad links, in the same order (the edge
+            // pass itself: fairness_links(surface) takes the quad links at once for two regions).
             const VertexLinks quad_links = vertex_links(binary.quads, binary.vertex_count());
-            const VertexLinks links = fairness_links(labels);
+            const VertexLinks links = fairness_links(labels, complex_edges(labels));
             EXPECT_EQ(links.offsets, quad_links.offsets);
             EXPECT_EQ(links.neighbors, quad_links.neighbors);
             EXPECT_EQ(find_junctions(labels, complex_edges(labels)).vertex_count, 0);

@@ -65,7 +65,8 @@ PointMatrix junction_turn_targets(const DigitalSurface& surface, const ComplexEd
 ///    averaged in);
 ///  * a junction point (one, or three or more junction edges): none, no fairness; alignment and
 ///    data place it.
-/// A surface without face labels or surfels (a welded block-wise surface) gets vertex_links(quads).
+/// A surface without face labels or surfels (a welded block-wise surface), or of two regions (a binary
+/// volume, one label), gets vertex_links(quads) at once.
 VertexLinks fairness_links(const DigitalSurface& surface);
 /// The same for a surface with face labels and surfels, from its edges (complex_edges), for a
 /// caller that needs them too.
