@@ -12,6 +12,12 @@
 //       The validity repair on the solved complex of sectors and layers (default H = 1 0.5): counts,
 //       rounds, displacement of junction and other vertices, label volumes, junction accuracy.
 //
+//   dsreg_bench_labels folds PATH X,Y,Z [SHARE ...]
+//       A uint16 .raw label map of dims X,Y,Z (e.g. the --input-file of blobs) solved without the
+//       repair, for each --junction-turn-share (default 0 and the default): its folded and
+//       intersecting faces by how many of their corners are junction vertices, and by whether a
+//       corner is a held turn or a junction point (docs/multi-label.md).
+//
 //   dsreg_bench_labels blobs --labels N --dims X,Y,Z --radius R [--seed S] [--binary] [--out DIR]
 //       A label map of N random blobs packed in a ball of radius R voxels (blob_values below),
 //       written as a uint16 .raw file, then one run of the pipeline on it (read included) with
@@ -23,6 +29,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -31,6 +38,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <random>
 #include <set>
 #include <string>
@@ -46,6 +54,7 @@
 #include "dsreg/pipeline.hpp"
 #include "dsreg/regularization.hpp"
 #include "dsreg/text.hpp"
+#include "dsreg/volume_io.hpp"
 
 namespace {
 
@@ -171,6 +180,58 @@ int accuracy(const std::vector<double>& steps) {
                             r.all_p95, r.junction_mean, r.junction_p95, 100 * r.shared);
             std::fflush(stdout);
         }
+    return 0;
+}
+
+// ---- folds -----------------------------------------------------------------------------------
+
+int folds(const std::string& path, const Index3& dims, std::vector<std::optional<double>> shares) {
+    RawVolumeLayout layout;
+    layout.dims = dims;
+    layout.type = RawVoxelType::UInt16;
+    LoadedVolume loaded;
+    loaded.labels = read_label_volume(path, &layout);
+    loaded.volume.grid = loaded.labels->grid;
+    loaded.description = path;
+    loaded.h = 1;
+    if (shares.empty()) shares = {0.0, std::nullopt};
+    std::printf("| share | junction corners | faces | folded | intersecting | folded with a held turn | folded with a junction point |\n");
+    std::printf("|---|---|---|---|---|---|---|\n");
+    for (const std::optional<double>& share : shares) {
+        PipelineOptions options;
+        options.validity = ValidityMode::Check;
+        options.extensions.junction_turn_share = share;
+        const PipelineResult r = run_pipeline(loaded, options);
+        const DigitalSurface& s = r.surface;
+        const ComplexEdges edges = complex_edges(s);
+        const Junctions junctions = find_junctions(s, edges);
+        const std::vector<char> turn = junction_turn_vertices(s, edges);
+        std::vector<char> folded(std::size_t(s.face_count()), 0), crossing(folded.size(), 0);
+        for (const std::int32_t f : r.validity->before.folded) folded[std::size_t(f)] = 1;
+        for (const std::int32_t f : r.validity->before.intersecting_faces) crossing[std::size_t(f)] = 1;
+        std::array<std::int64_t, 5> faces{}, fold{}, cross{}, with_turn{}, with_point{};
+        for (std::int64_t f = 0; f < s.face_count(); ++f) {
+            int corners = 0;
+            bool has_turn = false, has_point = false;
+            for (int k = 0; k < 4; ++k) {
+                const std::int32_t v = s.quads(f, k);
+                corners += junctions.vertex[std::size_t(v)] ? 1 : 0;
+                has_turn |= turn[std::size_t(v)] && r.weights.fairness_targets.rows() > 0 && !r.weights.fairness_targets.row(v).isZero(0.0);
+                has_point |= junctions.vertex[std::size_t(v)] && junctions.edges_at_vertex[std::size_t(v)] != 2;
+            }
+            ++faces[std::size_t(corners)];
+            fold[std::size_t(corners)] += folded[std::size_t(f)];
+            cross[std::size_t(corners)] += crossing[std::size_t(f)];
+            with_turn[std::size_t(corners)] += folded[std::size_t(f)] && has_turn;
+            with_point[std::size_t(corners)] += folded[std::size_t(f)] && has_point;
+        }
+        const std::string name = share ? format("%g", *share) : "default";
+        for (int c = 0; c <= 4; ++c)
+            std::printf("| %s | %d | %lld | %lld | %lld | %lld | %lld |\n", name.c_str(), c, (long long)faces[std::size_t(c)],
+                        (long long)fold[std::size_t(c)], (long long)cross[std::size_t(c)], (long long)with_turn[std::size_t(c)],
+                        (long long)with_point[std::size_t(c)]);
+        std::fflush(stdout);
+    }
     return 0;
 }
 
@@ -386,6 +447,11 @@ int main(int argc, char** argv) {
             if (steps.empty()) steps = {1.0, 0.5};
             return repair(steps);
         }
+        if (args.size() >= 3 && args[0] == "folds") {
+            std::vector<std::optional<double>> shares;
+            for (std::size_t i = 3; i < args.size(); ++i) shares.emplace_back(std::stod(args[i]));
+            return folds(args[1], parse_dims(args[2]), shares);
+        }
         if (!args.empty() && args[0] == "blobs") {
             BlobOptions o;
             for (std::size_t i = 1; i < args.size(); ++i) {
@@ -407,7 +473,7 @@ int main(int argc, char** argv) {
             if (o.labels < 1 || o.labels > 65535) throw Error("--labels must be in 1..65535");
             return blobs(o);
         }
-        std::cerr << "usage: dsreg_bench_labels accuracy [H ...] | repair [H ...] | blobs --labels N --dims X,Y,Z --radius R [--seed S] [--binary] [--out DIR] [--input-file PATH]\n";
+        std::cerr << "usage: dsreg_bench_labels accuracy [H ...] | repair [H ...] | folds PATH X,Y,Z [SHARE ...] | blobs --labels N --dims X,Y,Z --radius R [--seed S] [--binary] [--out DIR] [--input-file PATH]\n";
         return 2;
     } catch (const std::exception& e) {
         std::cerr << "dsreg_bench_labels: " << e.what() << '\n';
