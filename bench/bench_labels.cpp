@@ -49,6 +49,7 @@
 #include "dsreg/label_evaluation.hpp"
 #include "dsreg/label_shapes.hpp"
 #include "dsreg/label_surface.hpp"
+#include "dsreg/mesh_validity.hpp"
 #include "dsreg/normals.hpp"
 #include "dsreg/validity_repair.hpp"
 #include "dsreg/pipeline.hpp"
@@ -225,7 +226,31 @@ int folds(const std::string& path, const Index3& dims, std::vector<std::optional
             with_turn[std::size_t(corners)] += folded[std::size_t(f)] && has_turn;
             with_point[std::size_t(corners)] += folded[std::size_t(f)] && has_point;
         }
+        // The folded corners (apexes) of the folded faces with three junction corners: the turn
+        // (the corner between two junction edges), its two neighbours on the curve, or the face's
+        // fourth corner, in a sheet.
+        std::array<std::int64_t, 3> apex{};  // turn, curve neighbour, sheet corner
+        for (std::int64_t f = 0; f < s.face_count(); ++f) {
+            if (!folded[std::size_t(f)]) continue;
+            std::array<Eigen::Vector3d, 4> quad;
+            int corners = 0;
+            for (int k = 0; k < 4; ++k) {
+                quad[std::size_t(k)] = r.regularization.positions.row(s.quads(f, k)).transpose();
+                corners += junctions.vertex[std::size_t(s.quads(f, k))] ? 1 : 0;
+            }
+            if (corners != 3) continue;
+            const std::array<bool, 4> at = folded_corners(quad, r.field.normals.row(f).transpose());
+            for (int k = 0; k < 4; ++k) {
+                if (!at[std::size_t(k)]) continue;
+                const std::int32_t v = s.quads(f, k);
+                if (!junctions.vertex[std::size_t(v)]) ++apex[2];
+                else if (junctions.vertex[std::size_t(s.quads(f, (k + 1) % 4))] && junctions.vertex[std::size_t(s.quads(f, (k + 3) % 4))]) ++apex[0];
+                else ++apex[1];
+            }
+        }
         const std::string name = share ? format("%g", *share) : "default";
+        std::printf("| %s | folded corners of the three-junction-corner faces: turn %lld, curve neighbour %lld, sheet corner %lld |\n",
+                    name.c_str(), (long long)apex[0], (long long)apex[1], (long long)apex[2]);
         for (int c = 0; c <= 4; ++c)
             std::printf("| %s | %d | %lld | %lld | %lld | %lld | %lld |\n", name.c_str(), c, (long long)faces[std::size_t(c)],
                         (long long)fold[std::size_t(c)], (long long)cross[std::size_t(c)], (long long)with_turn[std::size_t(c)],
