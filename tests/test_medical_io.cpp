@@ -328,6 +328,17 @@ TEST(MedicalIo, MetaImageWithoutItsDataFileIsRejected) {
     write_bytes(scratch.path("bomb.mha"), "ObjectType = Image\nNDims = 3\nDimSize = 1000 1000 1000\nElementType = MET_UCHAR\n"
                                           "CompressedData = True\nElementDataFile = LOCAL\nxxxx");
     expect_error([&] { read_volume(scratch.path("bomb.mha")); }, scratch.path("bomb.mha"), "truncated or lying header");
+    // ITK's MetaIO matches keys case by case: past "ElementdataFile" it read on as header through
+    // the payload, whose long binary "key" overflowed a 255-byte field (found by fuzzing).
+    write_bytes(scratch.path("case.mha"), "ObjectType = Image\nNDims = 3\nDimSize = 2 2 2\nElementType = MET_UCHAR\n"
+                                          "ElementdataFile = LOCAL\n" + std::string(400, 'a') + " = 1\n");
+    expect_error([&] { read_volume(scratch.path("case.mha")); }, scratch.path("case.mha"),
+                 "'ElementdataFile' must be spelled 'ElementDataFile'");
+    // A type ITK does not know is refused by dsreg's header check (the first fuzz input that
+    // garbled it, crash-garbled-element-type.mha, did so past such a key).
+    write_bytes(scratch.path("type.mha"), "ObjectType = Image\nNDims = 3\nDimSize = 2 2 2\nElementType = MET_UCH\n"
+                                          "ElementDataFile = LOCAL\n" + std::string(8, '\0'));
+    expect_error([&] { read_volume(scratch.path("type.mha")); }, scratch.path("type.mha"), "unsupported ElementType 'MET_UCH'");
 }
 
 /// The byte offset of the value of `tag` in the `directory`-th IFD (0-based) of a little-endian

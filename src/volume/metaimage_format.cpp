@@ -90,7 +90,17 @@ Fields read_fields(InputFile& file) {
                       " here but for lists of numbers such as DimSize: ITK's MetaImage reader cannot hold longer ones)");
         if (!fields.emplace(key, value).second)
             file.fail("key '" + trim(line.substr(0, equals)) + "' appears twice (line " + std::to_string(line_number) + ")");
-        if (key == "elementdatafile") return fields;  // the data (if LOCAL) starts on the next line
+        // The data (if LOCAL) starts on the next line. ITK's MetaIO matches keys case-sensitively:
+        // past "ElementdataFile" it reads on as header, through the payload, whose lines dsreg
+        // never checked (a binary key of 400 bytes there overflowed its 255-byte field name:
+        // found by fuzzing). So the header ends where MetaIO ends it, and another spelling is refused.
+        if (key == "elementdatafile") {
+            const std::string spelled = trim(line.substr(0, equals));
+            if (spelled != "ElementDataFile")
+                file.fail("header line " + std::to_string(line_number) + ": '" + spelled +
+                          "' must be spelled 'ElementDataFile' (ITK's MetaImage reader matches keys case by case)");
+            return fields;
+        }
     }
 }
 
