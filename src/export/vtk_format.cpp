@@ -292,7 +292,8 @@ private:
         for (std::uint64_t c = 0; c < first; ++c) {
             if (at >= cells.size()) fail("POLYGONS holds fewer cells than announced");
             const double size = cells[at++];
-            if (!(size >= 0) || at + static_cast<std::size_t>(size) > cells.size()) fail("polygon size out of range");
+            // Compared as a double first: a size beyond any integer made the cast undefined (found by fuzzing).
+            if (!(size >= 0) || size > double(cells.size() - at)) fail("polygon size out of range");
             add_face(cells.data() + at, static_cast<std::size_t>(size));
             at += static_cast<std::size_t>(size);
         }
