@@ -10,7 +10,10 @@
 #include <hdf5.h>
 #include <zlib.h>
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -63,7 +66,8 @@ std::int64_t inflated_size(const std::vector<std::uint8_t>& compressed, std::uin
 /// overflow in H5VM_memcpyvv; found by fuzzing). So the chunks are read raw and inflated here
 /// first; the filters checked are deflate and shuffle (which keeps the size), the ones ITK
 /// writes; a data set with another filter is refused.
-void check_chunk_sizes(const InputFile& file, hid_t data_set, hid_t properties, std::uint64_t chunk_bytes) {
+void check_chunk_sizes(const InputFile& file, hid_t data_set, hid_t properties, std::uint64_t chunk_bytes, hsize_t chunk_slices,
+                       const std::optional<std::array<std::int64_t, 2>>& slices) {
     bool deflate_in_pipeline = false;
     unsigned deflate_bit = 0;
     const int filters = H5Pget_nfilters(properties);
@@ -87,6 +91,10 @@ void check_chunk_sizes(const InputFile& file, hid_t data_set, hid_t properties, 
         hsize_t size = 0;
         if (H5Dget_chunk_info(data_set, space.id(), c, offset, &mask, &address, &size) < 0 || size > file.size())
             file.fail("chunk " + std::to_string(c) + " of the voxel data set cannot be located in the file");
+        // HDF5's first dimension is ITK's z (C order): a chunk outside the slices read is not decoded.
+        if (slices && (offset[0] >= hsize_t(std::max<std::int64_t>((*slices)[1], 0)) ||
+                       offset[0] + chunk_slices <= hsize_t(std::max<std::int64_t>((*slices)[0], 0))))
+            continue;
         std::vector<std::uint8_t> raw(static_cast<std::size_t>(size));
         if (H5Dread_chunk(data_set, H5P_DEFAULT, offset, &mask, raw.data()) < 0)
             file.fail("chunk " + std::to_string(c) + " of the voxel data set cannot be read");
@@ -100,7 +108,7 @@ void check_chunk_sizes(const InputFile& file, hid_t data_set, hid_t properties, 
 }
 
 /// A chunk that the whole file could not hold even compressed is refused: HDF5 allocates it.
-void check_chunks(const InputFile& file, hid_t data_set) {
+void check_chunks(const InputFile& file, hid_t data_set, const std::optional<std::array<std::int64_t, 2>>& slices) {
     const Handle properties(H5Dget_create_plist(data_set), H5Pclose);
     const Handle type(H5Dget_type(data_set), H5Tclose);
     if (!properties.valid() || !type.valid() || H5Pget_layout(properties.id()) != H5D_CHUNKED) return;
@@ -111,12 +119,12 @@ void check_chunks(const InputFile& file, hid_t data_set) {
     if (bytes > max_inflated_size(file.size()))
         file.fail("the voxel data set is stored in chunks of " + std::to_string(bytes) + " bytes, more than the " +
                   std::to_string(file.size()) + "-byte file can hold even compressed");
-    check_chunk_sizes(file, data_set, properties.id(), bytes);
+    if (rank > 0) check_chunk_sizes(file, data_set, properties.id(), bytes, chunk[0], slices);
 }
 
 }  // namespace
 
-void check_hdf5_voxel_data(const std::string& path) {
+void check_hdf5_voxel_data(const std::string& path, std::optional<std::array<std::int64_t, 2>> slices) {
     const InputFile file(path);
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
     const Handle h5(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
@@ -127,7 +135,7 @@ void check_hdf5_voxel_data(const std::string& path) {
     if (stored > file.size())
         file.fail("the voxel data set claims " + std::to_string(stored) + " bytes of storage, but the file holds " +
                   std::to_string(file.size()));
-    check_chunks(file, data_set.id());
+    check_chunks(file, data_set.id(), slices);
 }
 
 }  // namespace dsreg::volume_io_detail

@@ -77,7 +77,11 @@ void read_itk_voxels(const std::string& path, ItkFormat format, const VolumeLimi
         check_dicom_in_child_process({path});
     }
     if (format == ItkFormat::VtkImage) check_vtk_image_header(path);
-    if (format == ItkFormat::Hdf5) check_hdf5_voxel_data(path);
+    if (format == ItkFormat::Hdf5) {  // a box read decodes the chunks of its slices only: so are they checked
+        const StreamRegion* region = destination.region();
+        check_hdf5_voxel_data(path, region ? std::optional<std::array<std::int64_t, 2>>({region->box.lo[2], region->box.hi[2]})
+                                           : std::nullopt);
+    }
     ItkImageReader reader(path, format);
     const ImageHeader& header = reader.header();
     if (!prepare_destination(path, header, {path}, limits, destination)) return;

@@ -13,10 +13,12 @@
 #pragma once
 
 #include <cstddef>
+#include <array>
 #include <cstdint>
 #include <fstream>
 #include <ostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -331,9 +333,12 @@ void check_dicom_meta(const std::string& path);
 /// and three numbers on each geometry line. Throws naming the file and the line.
 void check_vtk_image_header(const std::string& path);
 /// Throws (naming the file) where the voxel data set of an HDF5 image as ITK writes it claims
-/// more storage than the file holds, or chunks it could not hold compressed: HDF5 allocates them
-/// (hdf5_storage.cpp). Files HDF5 cannot open are left to ITK's reader.
-void check_hdf5_voxel_data(const std::string& path);
+/// more storage than the file holds, or chunks it could not hold compressed (HDF5 allocates
+/// them), or a chunk that does not decode to a whole chunk (HDF5 copies past it), or uses a filter
+/// other than deflate and shuffle (hdf5_storage.cpp). Files HDF5 cannot open are left to ITK's reader.
+/// `slices`: the [first, end) z slices a box read needs (chunks elsewhere are not decoded); all
+/// without it.
+void check_hdf5_voxel_data(const std::string& path, std::optional<std::array<std::int64_t, 2>> slices = std::nullopt);
 void read_dicom_series_voxels(const std::string& folder, const VolumeLimits& limits, VoxelDestination& destination);
 
 /// Every format dsreg reads, told from the file name (compound extensions such as .nii.gz
