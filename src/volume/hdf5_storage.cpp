@@ -95,7 +95,13 @@ void check_chunk_sizes(const InputFile& file, hid_t data_set, hid_t properties, 
         if (slices && (offset[0] >= hsize_t(std::max<std::int64_t>((*slices)[1], 0)) ||
                        offset[0] + chunk_slices <= hsize_t(std::max<std::int64_t>((*slices)[0], 0))))
             continue;
-        std::vector<std::uint8_t> raw(static_cast<std::size_t>(size));
+        // H5Dread_chunk finds the chunk by its offset, whose record may not be the one listed at c
+        // in a damaged index (it wrote past a buffer of the listed size: found by fuzzing), so the
+        // buffer takes the size stored under that offset.
+        hsize_t stored = 0;
+        if (H5Dget_chunk_storage_size(data_set, offset, &stored) < 0 || stored > file.size())
+            file.fail("chunk " + std::to_string(c) + " of the voxel data set cannot be located in the file");
+        std::vector<std::uint8_t> raw(static_cast<std::size_t>(stored));
         if (H5Dread_chunk(data_set, H5P_DEFAULT, offset, &mask, raw.data()) < 0)
             file.fail("chunk " + std::to_string(c) + " of the voxel data set cannot be read");
         const bool deflated = deflate_in_pipeline && !(mask & (1u << deflate_bit));
