@@ -30,6 +30,11 @@ struct ComplexEdges {
 
 ComplexEdges complex_edges(const DigitalSurface& surface);
 
+/// Whether the surface can have junctions: it carries its faces' labels and surfels (a welded
+/// block-wise surface does not) and separates three regions or more (a binary volume, or a map of
+/// one label, has two: its complex is a manifold, its fairness links are the quad links).
+bool may_have_junctions(const DigitalSurface& surface);
+
 /// 1 for the end points of junction edges; the number of junction edges of each vertex.
 struct Junctions {
     std::vector<char> vertex;

@@ -191,13 +191,8 @@ namespace {
 /// The fairness targets and multipliers of the turns of junction curves (label maps only).
 void hold_junction_turns(const RegularizationExtensions& o, const DigitalSurface& surface, RegularizationWeights& weights) {
     const double share = o.junction_turn_share.value_or(kDefaultJunctionTurnShare);
-    // Without fairness (γ = 0) there is no term to offset; where every face separates the same
-    // two regions (a binary surface, a block of one) no edge is a junction.
-    const std::vector<FaceLabels>& labels = surface.face_labels;
-    if (share == 0 || !(weights.gamma > 0) || labels.size() != std::size_t(surface.face_count()) ||
-        surface.surfels.size() != std::size_t(surface.face_count()) ||
-        std::all_of(labels.begin(), labels.end(), [&](const FaceLabels& l) { return l.inner == labels[0].inner && l.outer == labels[0].outer; }))
-        return;
+    // Without fairness (γ = 0) there is no term to offset.
+    if (share == 0 || !(weights.gamma > 0) || !may_have_junctions(surface)) return;
     const ComplexEdges edges = complex_edges(surface);
     weights.fairness_targets = junction_turn_targets(surface, edges, fairness_links(surface, edges), share);
     if (weights.fairness_targets.rows() == 0) return;

@@ -53,6 +53,11 @@ ComplexEdges complex_edges(const DigitalSurface& surface) {
     return edges;
 }
 
+bool may_have_junctions(const DigitalSurface& surface) {
+    const std::size_t faces = std::size_t(surface.face_count());
+    return surface.face_labels.size() == faces && surface.surfels.size() == faces && surface.label_count() > 2;
+}
+
 Junctions find_junctions(const DigitalSurface& surface, const ComplexEdges& edges) {
     Junctions junctions;
     junctions.vertex.assign(static_cast<std::size_t>(surface.vertex_count()), 0);
@@ -100,13 +105,10 @@ PointMatrix junction_turn_targets(const DigitalSurface& surface, const ComplexEd
 }
 
 VertexLinks fairness_links(const DigitalSurface& surface) {
-    // Without the faces' labels and surfels (a welded block-wise surface, always binary) the
-    // surface is a closed manifold: its links are the quad links. So they are with two regions
-    // (a binary volume, one label), which have no junction: the edge pass would find the same
-    // links in the same order (LabelSurface.BinaryVolumeIsTheSpecialCase), at about 0.4 µs a face.
-    const std::size_t faces = std::size_t(surface.face_count());
-    if (surface.face_labels.size() != faces || surface.surfels.size() != faces || surface.label_count() <= 2)
-        return vertex_links(surface.quads, surface.vertex_count());
+    // Without junctions the surface is a closed manifold: its links are the quad links, which the
+    // edge pass would find in the same order (LabelSurface.BinaryVolumeIsTheSpecialCase), at
+    // about 0.4 µs a face.
+    if (!may_have_junctions(surface)) return vertex_links(surface.quads, surface.vertex_count());
     return fairness_links(surface, complex_edges(surface));
 }
 

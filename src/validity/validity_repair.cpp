@@ -761,8 +761,7 @@ ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointM
     result.fairness_factors = Eigen::VectorXd::Ones(surface.vertex_count());
     // A label complex (a binary surface, labels {0, 1}, has no junction): its edges give both
     // the fairness links and the junction turns.
-    const bool complex = surface.label_count() > 2 && surface.face_labels.size() == std::size_t(surface.face_count()) &&
-                         surface.surfels.size() == std::size_t(surface.face_count());
+    const bool complex = may_have_junctions(surface);
     const ComplexEdges edges = complex ? complex_edges(surface) : ComplexEdges{};
     const VertexLinks links = complex ? fairness_links(surface, edges) : fairness_links(surface);
     report.energy_before = regularization_energy(positions, surface.vertices, surface.quads, links, normals, weights);
