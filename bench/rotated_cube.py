@@ -61,10 +61,11 @@ def edge_distance(centroids):
     return np.hypot(1 - rotated[:, 2], 1 - rotated[:, 1]) / H
 
 
-def summary(distance_h, angle, to_edge):
+def summary(distance_h, normal_deg, angle, to_edge):
+    """The mesh's means and its per-face normal errors `angle` (NaN: not measured) by region."""
     valid = ~np.isnan(angle)
     near, face = valid & (to_edge < 2), valid & (to_edge >= 5)
-    return {"distance_h": float(np.mean(distance_h)), "normal_deg": float(np.nanmean(angle)),
+    return {"distance_h": float(distance_h), "normal_deg": float(normal_deg),
             "near_edge_deg": float(angle[near].mean()), "faces_deg": float(angle[face].mean()),
             "near_edge_faces": int(near.sum()), "face_faces": int(face.sum())}
 
@@ -115,7 +116,8 @@ def sharp_regions(mesh):
     centroids = np.array([vertices[f].mean(axis=0) for f in faces])
     _, truth = sharp_cube_truth(centroids)
     cosine = np.clip(np.sum(face_normals(vertices, faces) * truth, axis=1), -1, 1)
-    return summary(distance / H, np.degrees(np.arccos(cosine)), edge_distance(centroids))
+    angle = np.degrees(np.arccos(cosine))
+    return summary(np.mean(distance) / H, np.mean(angle), angle, edge_distance(centroids))
 
 
 def rounded_regions(dsreg, mesh, work):
@@ -124,16 +126,14 @@ def rounded_regions(dsreg, mesh, work):
                              "--h", str(H), "--voxel-coordinates", "--json", "--face-errors", errors]))
     with open(errors) as f:
         rows = np.array([[float(v) for v in row] for row in list(csv.reader(f))[1:]])
-    result = summary(np.zeros(1), rows[:, 3], edge_distance(rows[:, :3]))
-    result["distance_h"] = report["vertex_distance_h"]["mean"]
-    result["normal_deg"] = report["normal_angle_deg"]["mean"]
-    return result
+    return summary(report["vertex_distance_h"]["mean"], report["normal_angle_deg"]["mean"], rows[:, 3],
+                   edge_distance(rows[:, :3]))
 
 
 def measure_cube(kind, dsreg, extra, work):
     volume = os.path.join(work, f"{kind}.vol")
     run([dsreg, "digitize", "--shape", superquadric(DEGREES[kind]), "--box", str(BOX), "--h", str(H), "-o", volume])
-    regions = (lambda mesh: sharp_regions(mesh)) if kind == "sharp" else (lambda mesh: rounded_regions(dsreg, mesh, work))
+    regions = sharp_regions if kind == "sharp" else (lambda mesh: rounded_regions(dsreg, mesh, work))
     results = {}
     for name, options in FIELDS.items():
         mesh = os.path.join(work, "dsreg.obj")
