@@ -85,12 +85,13 @@ void check_chunk_sizes(const InputFile& file, hid_t data_set, hid_t properties, 
     hsize_t chunks = 0;
     if (!space.valid() || H5Dget_num_chunks(data_set, space.id(), &chunks) < 0) return;  // ITK says what is wrong
     for (hsize_t c = 0; c < chunks; ++c) {
+        const auto fail = [&](const std::string& what) { file.fail("chunk " + std::to_string(c) + " of the voxel data set " + what); };
         hsize_t offset[H5S_MAX_RANK];
         unsigned mask = 0;
         haddr_t address = 0;
         hsize_t size = 0;
         if (H5Dget_chunk_info(data_set, space.id(), c, offset, &mask, &address, &size) < 0 || size > file.size())
-            file.fail("chunk " + std::to_string(c) + " of the voxel data set cannot be located in the file");
+            fail("cannot be located in the file");
         // HDF5's first dimension is ITK's z (C order): a chunk outside the slices read is not decoded.
         if (slices && (offset[0] >= hsize_t(std::max<std::int64_t>((*slices)[1], 0)) ||
                        offset[0] + chunk_slices <= hsize_t(std::max<std::int64_t>((*slices)[0], 0))))
@@ -100,16 +101,15 @@ void check_chunk_sizes(const InputFile& file, hid_t data_set, hid_t properties, 
         // buffer takes the size stored under that offset.
         hsize_t stored = 0;
         if (H5Dget_chunk_storage_size(data_set, offset, &stored) < 0 || stored > file.size())
-            file.fail("chunk " + std::to_string(c) + " of the voxel data set cannot be located in the file");
+            fail("cannot be located in the file");
         std::vector<std::uint8_t> raw(static_cast<std::size_t>(stored));
-        if (H5Dread_chunk(data_set, H5P_DEFAULT, offset, &mask, raw.data()) < 0)
-            file.fail("chunk " + std::to_string(c) + " of the voxel data set cannot be read");
+        if (H5Dread_chunk(data_set, H5P_DEFAULT, offset, &mask, raw.data()) < 0) fail("cannot be read");
         const bool deflated = deflate_in_pipeline && !(mask & (1u << deflate_bit));
         const std::int64_t decoded = deflated ? inflated_size(raw, chunk_bytes) : std::int64_t(raw.size());
         if (decoded != std::int64_t(chunk_bytes))
-            file.fail("chunk " + std::to_string(c) + " of the voxel data set decodes to " +
-                      (decoded < 0 ? std::string("nothing (a damaged deflate stream)") : std::to_string(decoded) + " bytes") +
-                      ", not the " + std::to_string(chunk_bytes) + " of a chunk");
+            fail("decodes to " +
+                 (decoded < 0 ? std::string("nothing (a damaged deflate stream)") : std::to_string(decoded) + " bytes") +
+                 ", not the " + std::to_string(chunk_bytes) + " of a chunk");
     }
 }
 
