@@ -286,6 +286,10 @@ void add_pipeline_flags(CLI::App& command, RegularizeCommand& c) {
                      "Keep the mesh as solved: self-intersections and faces folded against u are counted and reported "
                      "but not repaired (docs/validity.md)");
     command.add_flag("--no-check", c.flags.no_check, "Do not even count them (implies --no-repair)");
+    command.add_flag("--keep-voxels", c.options.keep_voxels,
+                     "The repair also puts back every voxel centre the solved mesh has on the wrong side (except "
+                     "where the voxels are noisy), bounding the vertices around it along their faces' axes "
+                     "(docs/validity.md)");
     command.add_flag("--triangulate", c.outputs.triangulate, "Split each quad along its shorter diagonal");
     command.add_option("--input-mesh", c.outputs.input_mesh, "Also write the unregularized digital surface to this file");
     command.add_option("--report", c.outputs.report, "Write counts, timings, energies and parameters as JSON");

@@ -96,6 +96,13 @@ std::vector<double> triangle_min_angles(const PointMatrix& vertices, const FaceM
 std::vector<std::uint8_t> voxel_centres_inside(const PointMatrix& vertices, const FaceMatrix& triangles,
                                                const VoxelGrid& grid);
 
+/// The same on the voxel rows (j, k) flagged in `rows` (index j + ny·k) only: those rows of
+/// `inside` are computed again, the others kept (after a move of some vertices, the rows that
+/// their triangles' y-z bounding boxes covered before or cover now). Throws dsreg::Error for
+/// sizes that do not match the grid.
+void update_voxel_centres_inside(const PointMatrix& vertices, const FaceMatrix& triangles, const VoxelGrid& grid,
+                                 const std::vector<char>& rows, std::vector<std::uint8_t>& inside);
+
 // ---------------------------------------------------------------------------------------------
 // Ground truth of an implicit shape
 

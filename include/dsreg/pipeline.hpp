@@ -306,6 +306,10 @@ struct PipelineOptions {
     RegularizationExtensions extensions;
     BlockOptions blocks;
     ValidityMode validity = ValidityMode::Repair;   ///< --no-repair, --no-check
+    /// --keep-voxels: the repair also puts back every voxel centre the solved mesh has on the
+    /// wrong side (ValidityRepairOptions::voxels), except where the voxels are noisy. Binary
+    /// volumes read whole (not label maps, not block-wise runs); nothing with --clamp, which keeps them all.
+    bool keep_voxels = false;
 };
 
 /// Checks every option of a run before any long computation. Throws dsreg::Error naming the flag.

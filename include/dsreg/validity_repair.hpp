@@ -94,6 +94,22 @@ struct ValidityRepairOptions {
     BoxQpOptions qp;            ///< KKT tolerance of the solves in the reversible mode
     /// Reversible mode: the clamp half-width (voxels, < ½); every local solve keeps the clamp boxes.
     std::optional<double> clamp_half_width;
+    /// The input volume, to put every voxel centre back on its side (null: not asked; ignored in
+    /// the reversible mode, which keeps them all; its grid must be the surface's). Each round,
+    /// where the mesh has an object voxel's centre outside or a background voxel's inside (ray
+    /// parity, voxel_centres_inside), every vertex i within `voxel_reach` voxels of that voxel
+    /// (its pointel a with i − reach ≤ a ≤ i + 1 + reach on each axis) is bounded on the axis a
+    /// of each of its faces: |x_i,a − p_i,a| ≤ voxel_half_width·s_a, the coordinate of the
+    /// reversible mode's box that keeps a face's triangles off every voxel centre
+    /// (docs/clamped.md), in the plane directions free. The windows around the bounded vertices
+    /// are re-solved (box QP), and a voxel still wrong the next round bounds one voxel further,
+    /// so the repair ends with every such centre on its side (docs/validity.md, "Voxel centres").
+    /// A voxel with a `noisy_voxels` vertex within `voxel_reach` is left as it is: where the
+    /// voxels are noise the surface should not follow them.
+    const BinaryVolume* voxels = nullptr;
+    std::vector<char> noisy_voxels;  ///< per vertex (empty: none)
+    double voxel_half_width = 0.499;
+    int voxel_reach = 1;
 };
 
 struct ValidityRepairReport {
@@ -116,6 +132,12 @@ struct ValidityRepairReport {
     EnergyTerms energy_after;                ///< E(x), input weights and field
     double check_seconds = 0;                ///< validity checks
     double solve_seconds = 0;                ///< local solves
+    /// With options.voxels: voxel centres on the wrong side of p* and of x, and the vertices
+    /// bounded to put them back (−1, 0 when not asked).
+    std::int64_t wrong_voxels_before = -1;
+    std::int64_t wrong_voxels_after = -1;
+    std::int64_t bounded_vertices = 0;
+    std::int64_t noisy_wrong_voxels = 0;     ///< of wrong_voxels_after, left as noise (noisy_voxels)
 };
 
 struct ValidityRepairResult {

@@ -73,7 +73,9 @@ std::pair<std::int64_t, std::int64_t> row_range(double low, double high, double 
     return {lo, hi};
 }
 
-RowBuckets bucket_triangles_by_row(const PointMatrix& v, const FaceMatrix& triangles, const VoxelGrid& grid) {
+/// The triangles bucketed by row; with `rows` (one flag per row j + ny·k), only those rows.
+RowBuckets bucket_triangles_by_row(const PointMatrix& v, const FaceMatrix& triangles, const VoxelGrid& grid,
+                                   const std::vector<char>* rows = nullptr) {
     const std::int64_t ny = grid.dims[1], nz = grid.dims[2];
     RowBuckets buckets;
     buckets.offsets.assign(std::size_t(ny * nz + 1), 0);
@@ -86,7 +88,8 @@ RowBuckets bucket_triangles_by_row(const PointMatrix& v, const FaceMatrix& trian
         const auto [j0, j1] = row_range(y0, y1, grid.origin.y(), grid.spacing.y(), ny);
         const auto [k0, k1] = row_range(z0, z1, grid.origin.z(), grid.spacing.z(), nz);
         for (std::int64_t k = k0; k <= k1; ++k)
-            for (std::int64_t j = j0; j <= j1; ++j) visit(j + ny * k);
+            for (std::int64_t j = j0; j <= j1; ++j)
+                if (!rows || (*rows)[std::size_t(j + ny * k)]) visit(j + ny * k);
     };
     for (Eigen::Index t = 0; t < triangles.rows(); ++t)
         for_each_row(t, [&](std::int64_t row) { buckets.offsets[std::size_t(row + 1)] += 1; });
@@ -98,19 +101,20 @@ RowBuckets bucket_triangles_by_row(const PointMatrix& v, const FaceMatrix& trian
     return buckets;
 }
 
-}  // namespace
-
-std::vector<std::uint8_t> voxel_centres_inside(const PointMatrix& vertices, const FaceMatrix& triangles,
-                                               const VoxelGrid& grid) {
-    if (triangles.rows() > 0 && triangles.cols() != 3) throw Error("voxel_centres_inside: the faces must be triangles");
+void check_triangles(const PointMatrix& vertices, const FaceMatrix& triangles, const char* caller) {
+    if (triangles.rows() > 0 && triangles.cols() != 3) throw Error(std::string(caller) + ": the faces must be triangles");
     for (Eigen::Index t = 0; t < triangles.rows(); ++t)
         for (int k = 0; k < 3; ++k)
             if (triangles(t, k) < 0 || triangles(t, k) >= vertices.rows())
-                throw Error("voxel_centres_inside: triangle " + std::to_string(t) + " has a vertex index out of range");
+                throw Error(std::string(caller) + ": triangle " + std::to_string(t) + " has a vertex index out of range");
+}
+
+/// Classifies the voxel centres of the rows (all of them, or those flagged in `rows`) into
+/// `inside` (the grid's size; each row done is written whole).
+void classify_rows(const PointMatrix& vertices, const FaceMatrix& triangles, const VoxelGrid& grid,
+                   const std::vector<char>* rows, std::vector<std::uint8_t>& inside) {
     const std::int64_t nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
-    std::vector<std::uint8_t> inside(std::size_t(grid.voxel_count()), 0);
-    if (triangles.rows() == 0 || grid.voxel_count() == 0) return inside;
-    const RowBuckets buckets = bucket_triangles_by_row(vertices, triangles, grid);
+    const RowBuckets buckets = bucket_triangles_by_row(vertices, triangles, grid, rows);
 
 #pragma omp parallel
     {
@@ -119,6 +123,9 @@ std::vector<std::uint8_t> voxel_centres_inside(const PointMatrix& vertices, cons
         for (std::int64_t k = 0; k < nz; ++k) {
             for (std::int64_t j = 0; j < ny; ++j) {
                 const std::int64_t row = j + ny * k;
+                if (rows && !(*rows)[std::size_t(row)]) continue;
+                std::uint8_t* row_inside = inside.data() + grid.linear_index(0, j, k);
+                std::fill(row_inside, row_inside + nx, std::uint8_t(0));
                 const Eigen::Vector3d start = grid.voxel_center(0, j, k);
                 const Point2 ray{start.y(), start.z()};
                 crossings.clear();
@@ -128,17 +135,44 @@ std::vector<std::uint8_t> voxel_centres_inside(const PointMatrix& vertices, cons
                 }
                 if (crossings.empty()) continue;
                 std::sort(crossings.begin(), crossings.end());
-                // Walk the row: voxel i is inside iff an odd number of crossings lie beyond x_i.
-                std::size_t passed = 0;
-                for (std::int64_t i = 0; i < nx; ++i) {
-                    const double x = start.x() + grid.spacing.x() * double(i);
-                    while (passed < crossings.size() && crossings[passed] <= x) ++passed;
-                    if ((crossings.size() - passed) % 2 == 1) inside[std::size_t(grid.linear_index(i, j, k))] = 1;
+                // Voxel i is inside iff an odd number of crossings lie beyond x_i: the voxels
+                // between crossings p − 1 and p (x_{p−1} ≤ x_i < x_p) are inside iff m − p is odd.
+                const auto voxel_x = [&](std::int64_t i) { return start.x() + grid.spacing.x() * double(i); };
+                const auto first_at_or_beyond = [&](double c) {  // the first i with x_i ≥ c
+                    std::int64_t i = std::int64_t(std::clamp(std::ceil((c - start.x()) / grid.spacing.x()), 0.0, double(nx)));
+                    while (i > 0 && voxel_x(i - 1) >= c) --i;
+                    while (i < nx && voxel_x(i) < c) ++i;
+                    return i;
+                };
+                const std::size_t m = crossings.size();
+                std::int64_t from = 0;
+                for (std::size_t p = 0; p <= m; ++p) {
+                    const std::int64_t to = p < m ? first_at_or_beyond(crossings[p]) : nx;
+                    if ((m - p) % 2 == 1 && to > from) std::fill(row_inside + from, row_inside + to, std::uint8_t(1));
+                    from = std::max(from, to);
                 }
             }
         }
     }
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> voxel_centres_inside(const PointMatrix& vertices, const FaceMatrix& triangles,
+                                               const VoxelGrid& grid) {
+    check_triangles(vertices, triangles, "voxel_centres_inside");
+    std::vector<std::uint8_t> inside(std::size_t(grid.voxel_count()), 0);
+    if (triangles.rows() == 0 || grid.voxel_count() == 0) return inside;
+    classify_rows(vertices, triangles, grid, nullptr, inside);
     return inside;
+}
+
+void update_voxel_centres_inside(const PointMatrix& vertices, const FaceMatrix& triangles, const VoxelGrid& grid,
+                                 const std::vector<char>& rows, std::vector<std::uint8_t>& inside) {
+    check_triangles(vertices, triangles, "update_voxel_centres_inside");
+    if (std::int64_t(rows.size()) != grid.dims[1] * grid.dims[2] || std::int64_t(inside.size()) != grid.voxel_count())
+        throw Error("update_voxel_centres_inside: one flag per voxel row and one value per voxel expected");
+    classify_rows(vertices, triangles, grid, &rows, inside);
 }
 
 }  // namespace dsreg

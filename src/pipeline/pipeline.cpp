@@ -77,11 +77,14 @@ std::string validity_counts(const MeshValidity& v) {
 
 /// What the check and repair did, for the stage line and the summary line.
 std::string validity_text(const ValidityRepairReport& r, const RegularizationWeights& w) {
-    if (r.before.valid()) return "valid solid";
-    if (r.rounds == 0) return validity_counts(r.before) + " (not repaired)";
-    std::string text = "repaired " + validity_counts(r.before) + " in " + std::to_string(r.rounds) + " rounds (" +
-                       std::to_string(r.region_vertices) + " vertices, energy -> " +
-                       format("%.4g", r.energy_after.total(w)) + ")";
+    std::string voxels;  // --keep-voxels
+    if (r.wrong_voxels_before > 0)
+        voxels = ", " + std::to_string(r.wrong_voxels_before - r.wrong_voxels_after) + " of " +
+                 std::to_string(r.wrong_voxels_before) + " voxel centres put back on their side";
+    if (r.rounds == 0) return (r.before.valid() ? "valid solid" : validity_counts(r.before) + " (not repaired)") + voxels;
+    std::string text = (r.before.valid() ? "valid solid" : "repaired " + validity_counts(r.before)) + voxels + " in " +
+                       std::to_string(r.rounds) + " rounds (" + std::to_string(r.region_vertices) +
+                       " vertices, energy -> " + format("%.4g", r.energy_after.total(w)) + ")";
     if (!r.after.valid()) text += ", left " + validity_counts(r.after);
     return text;
 }
@@ -110,13 +113,22 @@ nlohmann::json validity_json(const ValidityRepairReport& r, const Regularization
             {"max_displacement_voxels", r.max_displacement_voxels},
             {"energy_before", energy_json(r.energy_before, w)},
             {"energy_after", energy_json(r.energy_after, w)},
+            {"wrong_voxels_before", r.wrong_voxels_before},
+            {"wrong_voxels_after", r.wrong_voxels_after},
+            {"noisy_wrong_voxels", r.noisy_wrong_voxels},
+            {"bounded_vertices", r.bounded_vertices},
             {"seconds", {{"check", r.check_seconds}, {"solve", r.solve_seconds}}}};
 }
 
-/// Stage "validity": checks the solved mesh and, unless ValidityMode::Check, repairs it.
-void check_and_repair(const PipelineOptions& o, PipelineResult& result, StageClock& clock) {
+/// Stage "validity": checks the solved mesh and, unless ValidityMode::Check, repairs it; with
+/// `voxels` and --keep-voxels, also puts their centres back on their side.
+void check_and_repair(const PipelineOptions& o, PipelineResult& result, StageClock& clock, const BinaryVolume* voxels) {
     clock.start("validity");
     ValidityRepairOptions options;
+    if (o.keep_voxels && voxels) {
+        options.voxels = voxels;
+        options.noisy_voxels = noisy_voxel_vertices(result.surface, result.field);
+    }
     if (o.validity == ValidityMode::Check) options.max_rounds = 0;
     // Where the voxels are noisy, a fold is first smoothed (docs/accuracy.md, "Noisy voxels").
     const Eigen::VectorXd noisy = noise_multipliers(o.extensions, result.surface, result.field);
@@ -188,7 +200,7 @@ PipelineResult run_stages(const LoadedVolume& loaded, const PipelineOptions& o, 
     // On a label map, the complex: its junction edges are shared by three faces or more, which
     // meet there by index (mesh_validity.hpp); each label's surface is a subset of its faces.
     // The repair spreads from a junction into the sheets that meet there (docs/multi-label.md).
-    if (o.validity != ValidityMode::Off) check_and_repair(o, result, clock);
+    if (o.validity != ValidityMode::Off) check_and_repair(o, result, clock, loaded.labels ? nullptr : &loaded.volume);
     result.faces_against_field =
         count_faces_against_field(result.regularization.positions, result.surface.quads, result.field.normals);
     if (loaded.labels) {
@@ -301,7 +313,7 @@ nlohmann::json space_json(const VoxelGrid& grid, const PipelineOutputs& outputs,
 void check_and_repair_welded(const PipelineOptions& options, PipelineResult& result, const ProgressCallback& progress) {
     if (options.validity == ValidityMode::Off) return;
     StageClock clock(progress);
-    check_and_repair(options, result, clock);
+    check_and_repair(options, result, clock, nullptr);
     result.faces_against_field =
         count_faces_against_field(result.regularization.positions, result.surface.quads, result.field.normals);
     for (const auto& stage : clock.stage_seconds()) result.stage_seconds.push_back(stage);

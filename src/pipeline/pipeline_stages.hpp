@@ -53,6 +53,12 @@ double noise_fairness(const RegularizationExtensions& options);
 /// local_weights.hpp); empty when it is off or no face points against its surfel.
 Eigen::VectorXd noise_multipliers(const RegularizationExtensions& options, const DigitalSurface& surface, const NormalField& field);
 
+/// The vertices around which the voxels are noise for --keep-voxels (ValidityRepairOptions::
+/// noisy_voxels): at least 5 % of the faces within about three rings point against their surfel
+/// (the share ρ of noise_fairness_gamma, uncapped; docs/validity.md, "Voxel centres"). Empty
+/// when no face does.
+std::vector<char> noisy_voxel_vertices(const DigitalSurface& surface, const NormalField& field);
+
 /// Fills the metric (W0, W2) and the local multipliers of `weights` for this surface and normal
 /// field, reading the maps or files, the noise fairness multipliers (from the field's faces
 /// against their surfels) and, given the thin parts' reach (empty: none), the thin-part data

@@ -8,9 +8,11 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <Eigen/SparseCholesky>
@@ -19,8 +21,10 @@
 // The block rows of R, computed one vertex at a time (an internal header of the regularization
 // module): the repair reads the rows of its region only, never the whole assembled matrix.
 #include "../regularization/blas_threads.hpp"
+#include "../regularization/held_solver.hpp"
 #include "../regularization/regularization_operator.hpp"
 #include "dsreg/error.hpp"
+#include "dsreg/evaluation.hpp"  // voxel_centres_inside
 #include "dsreg/label_surface.hpp"
 #include "incremental_validity.hpp"
 #include "dsreg/solvers.hpp"
@@ -38,6 +42,8 @@ using SparseMatrix = Eigen::SparseMatrix<double>;
 /// exactly before the repair ends), far less.
 constexpr double kExactPartTolerance = 1e-12;
 constexpr double kRoundPartTolerance = 1e-6;
+/// CG iterations allowed to each solve of a large bounded part (multigrid-preconditioned).
+constexpr int kIterativePartIterations = 500;
 
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
@@ -53,9 +59,152 @@ void check_inputs(const DigitalSurface& surface, const PointMatrix& normals, con
                     o.alpha_grade > 1 && o.grade_rings >= 0 && o.region_rings >= o.grade_rings &&
                     o.window_rings >= 0 && o.split_offset >= 0 && o.split_offset < 0.5 && o.field_margin >= 0 &&
                     o.field_margin < 1 && o.max_rounds >= 0 &&
-                    (!o.clamp_half_width || (*o.clamp_half_width > o.split_offset && *o.clamp_half_width < 0.5));
+                    (!o.clamp_half_width || (*o.clamp_half_width > o.split_offset && *o.clamp_half_width < 0.5)) &&
+                    o.voxel_half_width > o.split_offset && o.voxel_half_width < 0.5 && o.voxel_reach >= 0;
     if (!ok) throw Error("validity repair: invalid options");
+    if (o.voxels && (o.voxels->grid.dims != surface.grid.dims ||
+                     std::int64_t(o.voxels->mask.size()) != o.voxels->grid.voxel_count()))
+        throw Error("validity repair: the volume's grid is not the surface's");
 }
+
+/// The voxel centres a mesh puts on the wrong side (options.voxels), kept up to date as vertices
+/// move (only the voxel rows that the moved vertices' triangles cover, before or after, are
+/// classified again), and the vertices around a voxel: those at the pointels within `reach`
+/// voxels of its cube.
+class VoxelSides {
+public:
+    VoxelSides(const BinaryVolume& volume, const DigitalSurface& surface, const PointMatrix& positions)
+        : volume_(volume), surface_(surface), positions_(positions),
+          triangles_(mesh_triangles(positions, surface.quads)),
+          inside_(voxel_centres_inside(positions, triangles_, volume.grid)),
+          quads_of_vertex_(std::size_t(surface.vertex_count())) {
+        pointel_vertices_.reserve(std::size_t(surface.vertex_count()));
+        for (std::int64_t v = 0; v < surface.vertex_count(); ++v)
+            pointel_vertices_.emplace_back(key(surface.vertex_pointels(v, 0), surface.vertex_pointels(v, 1),
+                                               surface.vertex_pointels(v, 2)),
+                                           std::int32_t(v));
+        std::sort(pointel_vertices_.begin(), pointel_vertices_.end());
+        for (std::int64_t q = 0; q < surface.face_count(); ++q)
+            for (int k = 0; k < 4; ++k) quads_of_vertex_[std::size_t(surface.quads(q, k))].push_back(std::int32_t(q));
+    }
+
+    /// The vertices in `moved` are now at their rows of `positions`.
+    void update(const PointMatrix& positions, const std::vector<std::int32_t>& moved) {
+        if (moved.empty()) return;
+        std::vector<std::int32_t> quads;
+        for (const std::int32_t v : moved) quads.insert(quads.end(), quads_of_vertex_[std::size_t(v)].begin(), quads_of_vertex_[std::size_t(v)].end());
+        std::sort(quads.begin(), quads.end());
+        quads.erase(std::unique(quads.begin(), quads.end()), quads.end());
+        const VoxelGrid& grid = volume_.grid;
+        std::vector<char> rows(std::size_t(grid.dims[1] * grid.dims[2]), 0);
+        const auto mark_rows = [&](std::int64_t t) {
+            double y0 = std::numeric_limits<double>::infinity(), y1 = -y0, z0 = y0, z1 = -y0;
+            for (int k = 0; k < 3; ++k) {
+                const std::int32_t v = triangles_(t, k);
+                y0 = std::min(y0, positions_(v, 1)), y1 = std::max(y1, positions_(v, 1));
+                z0 = std::min(z0, positions_(v, 2)), z1 = std::max(z1, positions_(v, 2));
+            }
+            // The rows whose centre line may meet the box, one more on each side against rounding.
+            const auto range = [](double low, double high, double origin, double spacing, std::int64_t count) {
+                const double first = std::floor((low - origin) / spacing) - 1, last = std::ceil((high - origin) / spacing) + 1;
+                return std::make_pair(std::int64_t(std::clamp(first, 0.0, double(count - 1))),
+                                      std::int64_t(std::clamp(last, 0.0, double(count - 1))));
+            };
+            const auto [j0, j1] = range(y0, y1, grid.origin.y(), grid.spacing.y(), grid.dims[1]);
+            const auto [k0, k1] = range(z0, z1, grid.origin.z(), grid.spacing.z(), grid.dims[2]);
+            for (std::int64_t k = k0; k <= k1; ++k)
+                for (std::int64_t j = j0; j <= j1; ++j) rows[std::size_t(j + grid.dims[1] * k)] = 1;
+        };
+        for (const std::int32_t q : quads) mark_rows(2 * std::int64_t(q)), mark_rows(2 * std::int64_t(q) + 1);
+        for (const std::int32_t v : moved) positions_.row(v) = positions.row(v);
+        FaceMatrix moved_quads(Eigen::Index(quads.size()), 4);
+        for (std::size_t k = 0; k < quads.size(); ++k) moved_quads.row(Eigen::Index(k)) = surface_.quads.row(quads[k]);
+        const FaceMatrix split = mesh_triangles(positions_, moved_quads);  // 2 triangles per quad, in order
+        for (std::size_t k = 0; k < quads.size(); ++k) {
+            triangles_.row(2 * Eigen::Index(quads[k])) = split.row(2 * Eigen::Index(k));
+            triangles_.row(2 * Eigen::Index(quads[k]) + 1) = split.row(2 * Eigen::Index(k) + 1);
+        }
+        for (const std::int32_t q : quads) mark_rows(2 * std::int64_t(q)), mark_rows(2 * std::int64_t(q) + 1);
+        update_voxel_centres_inside(positions_, triangles_, grid, rows, inside_);
+    }
+
+    /// Linear indices of the voxels whose centre the mesh (quads split along their shorter
+    /// diagonal) puts on the other side than the volume, increasing.
+    std::vector<std::int64_t> wrong() const {
+        std::vector<std::int64_t> voxels;
+        for (std::size_t v = 0; v < inside_.size(); ++v)
+            if ((inside_[v] != 0) != (volume_.mask[v] != 0)) voxels.push_back(std::int64_t(v));
+        return voxels;
+    }
+
+    std::vector<std::int32_t> vertices_near(std::int64_t voxel, int reach) const {
+        const Index3& dims = volume_.grid.dims;
+        const std::int64_t i = voxel % dims[0], j = (voxel / dims[0]) % dims[1], k = voxel / (dims[0] * dims[1]);
+        std::vector<std::int32_t> vertices;
+        for (std::int64_t c = k - reach; c <= k + 1 + reach; ++c)
+            for (std::int64_t b = j - reach; b <= j + 1 + reach; ++b) {
+                // Pointels of one (b, c) line are consecutive in key order.
+                const auto first = std::lower_bound(pointel_vertices_.begin(), pointel_vertices_.end(),
+                                                    std::make_pair(key(i - reach, b, c), std::int32_t(-1)));
+                const std::int64_t last = key(i + 1 + reach, b, c);
+                for (auto it = first; it != pointel_vertices_.end() && it->first <= last; ++it) vertices.push_back(it->second);
+            }
+        std::sort(vertices.begin(), vertices.end());
+        return vertices;
+    }
+
+private:
+    /// Pointel coordinates run from 0 to dims (and a little beyond in the search): offset so
+    /// that the key orders pointels by (c, b, a).
+    static std::int64_t key(std::int64_t a, std::int64_t b, std::int64_t c) {
+        constexpr std::int64_t kSide = std::int64_t(1) << 21, kOffset = 8;
+        return (a + kOffset) + kSide * ((b + kOffset) + kSide * (c + kOffset));
+    }
+
+    const BinaryVolume& volume_;
+    const DigitalSurface& surface_;
+    PointMatrix positions_;          ///< of the last update
+    FaceMatrix triangles_;           ///< 2q, 2q + 1: quad q split along its shorter diagonal at positions_
+    std::vector<std::uint8_t> inside_;  ///< per voxel: its centre is inside the mesh
+    std::vector<std::vector<std::int32_t>> quads_of_vertex_;
+    std::vector<std::pair<std::int64_t, std::int32_t>> pointel_vertices_;  ///< (pointel key, vertex), sorted
+};
+
+/// Solves with R whose held coordinates are decoupled (held_solver.hpp) by Eigen's simplicial
+/// Cholesky on one symbolic analysis: for the box QPs of small parts, where CHOLMOD's supernodal
+/// analysis and BLAS calls cost more than the factorization.
+class SimplicialHeldSolver : public detail::HeldSolver {
+public:
+    explicit SimplicialHeldSolver(const Eigen::SparseMatrix<double>& R) : R_(R), work_(R), diagonal_(R.diagonal()) {
+        R_.makeCompressed();
+        work_.makeCompressed();
+        cholesky_.analyzePattern(R_);
+    }
+    void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const override { y = R_ * x; }
+    const Eigen::VectorXd& diagonal() const override { return diagonal_; }
+    void hold(const std::vector<bool>& held) override {
+        for (Eigen::Index j = 0; j < R_.outerSize(); ++j)
+            for (Eigen::SparseMatrix<double>::InnerIterator it(R_, j), out(work_, j); it; ++it, ++out) {
+                const bool masked = held[std::size_t(it.row())] || held[std::size_t(j)];
+                out.valueRef() = !masked ? it.value() : (it.row() == j ? it.value() : 0.0);
+            }
+        cholesky_.factorize(work_);
+        ++factorizations_;
+        if (cholesky_.info() != Eigen::Success) throw Error("validity repair: a local system is not positive definite");
+    }
+    bool solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& y, double) override {
+        y = cholesky_.solve(rhs);
+        return true;
+    }
+    bool exact() const override { return true; }
+    int factorizations() const override { return factorizations_; }
+
+private:
+    Eigen::SparseMatrix<double> R_, work_;  ///< work_: R_'s pattern, the held rows and columns masked
+    Eigen::VectorXd diagonal_;
+    Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower> cholesky_;
+    int factorizations_ = 0;
+};
 
 /// Disjoint sets of vertices (the connected parts of the region).
 class Parts {
@@ -150,21 +299,52 @@ public:
         faces_of_vertex_.assign(std::size_t(surface.vertex_count()), {});
         for (std::int64_t f = 0; f < surface.face_count(); ++f)
             for (int k = 0; k < 4; ++k) faces_of_vertex_[std::size_t(surface.quads(f, k))].push_back(std::int32_t(f));
+        const Eigen::Index n = 3 * surface.vertex_count();
+        lower_ = Eigen::VectorXd::Constant(n, -std::numeric_limits<double>::infinity());
+        upper_ = Eigen::VectorXd::Constant(n, std::numeric_limits<double>::infinity());
+        bounded_.assign(std::size_t(surface.vertex_count()), 0);
+        if (o_.clamp_half_width)
+            for (std::int64_t v = 0; v < surface.vertex_count(); ++v) bound(std::int32_t(v), 0b111, *o_.clamp_half_width);
     }
+
+    /// Bounds the vertices around the voxels of `wrong` (VoxelSides, options.voxels): along the
+    /// axes of their own faces, `voxel_reach` voxels around at first, one more each time the
+    /// voxel is found wrong again. Returns the vertices bounded now, increasing.
+    std::vector<std::int32_t> bound_around(const VoxelSides& sides, const std::vector<std::int64_t>& wrong) {
+        std::vector<std::int32_t> newly;
+        for (const std::int64_t voxel : wrong)
+            for (const std::int32_t v : sides.vertices_near(voxel, o_.voxel_reach + voxel_tries_[voxel]++))
+                if (bound_faces_of(v)) newly.push_back(v);
+        std::sort(newly.begin(), newly.end());
+        newly.erase(std::unique(newly.begin(), newly.end()), newly.end());
+        return newly;
+    }
+
+    /// Whether a voxel is left as noise: a vertex around it is one of smooth_first's.
+    bool noisy_voxel(const VoxelSides& sides, std::int64_t voxel) const {
+        for (const std::int32_t v : sides.vertices_near(voxel, o_.voxel_reach))
+            if (std::size_t(v) < o_.noisy_voxels.size() && o_.noisy_voxels[std::size_t(v)]) return true;
+        return false;
+    }
+
+    std::int64_t bounded_vertex_count() const { return std::count(bounded_.begin(), bounded_.end(), 1); }
 
     /// One round on the invalid faces of `validity`: corrects the field, strengthens the data term,
     /// grows the region and re-solves the free region vertices within `window_rings` of the
     /// strengthened ones. `moved` and `refield` receive the vertices moved and the faces whose u
     /// changed.
-    void round(const MeshValidity& validity, ValidityRepairReport& report, std::vector<std::int32_t>& moved,
-               std::vector<std::int32_t>& refield) {
+    void round(const MeshValidity& validity, const std::vector<std::int32_t>& bounded, ValidityRepairReport& report,
+               std::vector<std::int32_t>& moved, std::vector<std::int32_t>& refield) {
         const auto started = Clock::now();
         moved_ = &moved;
         refield = correct_field(validity.folded, report);
         for (const std::int32_t f : refield)
             for (int k = 0; k < 4; ++k) changed_[std::size_t(surface_.quads(f, k))] = 1;
         const std::vector<std::int32_t> invalid = vertices_to_strengthen(validity);
-        const std::vector<std::int32_t> strengthened = strengthen(invalid);
+        std::vector<std::int32_t> strengthened = strengthen(invalid);
+        strengthened.insert(strengthened.end(), bounded.begin(), bounded.end());  // the seeds of the region and window
+        std::sort(strengthened.begin(), strengthened.end());
+        strengthened.erase(std::unique(strengthened.begin(), strengthened.end()), strengthened.end());
         for (const std::int32_t v : strengthened) changed_[std::size_t(v)] = 1;
         for (const std::int32_t v : rings_around(neighbours_, strengthened, o_.region_rings, mark_, [](std::int32_t) { return true; })) {
             if (!in_region_[std::size_t(v)]) changed_[std::size_t(v)] = 1;  // a new unknown of its part
@@ -210,9 +390,9 @@ public:
             return product;
         };
         double residual = 0;
-        if (o_.clamp_half_width) {
+        if (any_bounds_) {
             Eigen::VectorXd lower, upper;
-            clamp_bounds_of(region, lower, upper);
+            bounds_of(region, lower, upper);
             residual = box_qp_optimality(multiply, b, lower, upper, x, o_.qp.tolerance).kkt_residual;
         } else {
             residual = (multiply(x) - b).norm() / std::max(b.norm(), 1e-300);
@@ -419,7 +599,7 @@ private:
             // thread (a count the user set above one would queue them); the other parts use the
             // BLAS only in a rare fallback.
             std::optional<detail::OneBlasThread> blas;
-            if (together && !blas.emplace().serial() && o_.clamp_half_width) together = false;
+            if (together && !blas.emplace().serial() && any_bounds_) together = false;
 #pragma omp parallel for schedule(dynamic, chunk) if (together)
             for (std::size_t k = 0; k < which.size(); ++k) {
                 try {
@@ -605,15 +785,47 @@ private:
         for (std::size_t k = 0; k < part.size(); ++k) x.segment<3>(3 * Eigen::Index(k)) = x_.segment<3>(3 * Eigen::Index(part[k]));
     }
 
-    void clamp_bounds_of(const std::vector<std::int32_t>& part, Eigen::VectorXd& lower, Eigen::VectorXd& upper) const {
+    void bounds_of(const std::vector<std::int32_t>& part, Eigen::VectorXd& lower, Eigen::VectorXd& upper) const {
         lower.resize(3 * Eigen::Index(part.size()));
         upper.resize(lower.size());
-        for (std::size_t k = 0; k < part.size(); ++k)
-            for (int d = 0; d < 3; ++d) {
-                const double reach = *o_.clamp_half_width * surface_.grid.spacing[d];
-                lower[3 * Eigen::Index(k) + d] = surface_.vertices(part[k], d) - reach;
-                upper[3 * Eigen::Index(k) + d] = surface_.vertices(part[k], d) + reach;
-            }
+        for (std::size_t k = 0; k < part.size(); ++k) {
+            lower.segment<3>(3 * Eigen::Index(k)) = lower_.segment<3>(3 * Eigen::Index(part[k]));
+            upper.segment<3>(3 * Eigen::Index(k)) = upper_.segment<3>(3 * Eigen::Index(part[k]));
+        }
+    }
+
+    /// |x_v,d − p_v,d| ≤ half_width · s_d on the axes d of the mask `axes` (bit d).
+    void bound(std::int32_t v, int axes, double half_width) {
+        for (int d = 0; d < 3; ++d) {
+            if (!(axes & (1 << d))) continue;
+            bound_side(v, d, -1, half_width);
+            bound_side(v, d, 1, half_width);
+        }
+    }
+
+    /// |x_v,a − p_v,a| ≤ voxel_half_width·s_a on the axis a of each face of v (one slab per
+    /// axis: the two planes of voxel centres on either side of the pointel). Returns whether a
+    /// bound was added.
+    bool bound_faces_of(std::int32_t v) {
+        bool added = false;
+        for (const std::int32_t f : faces_of_vertex_[std::size_t(v)])
+            for (const int side : {-1, 1})
+                added = bound_side(v, surface_.surfels[std::size_t(f)].axis, side, o_.voxel_half_width) || added;
+        return added;
+    }
+
+    /// x_v,d ≥ p_v,d − half_width·s_d (side −1) or x_v,d ≤ p_v,d + half_width·s_d (side +1);
+    /// returns whether the bound is new.
+    bool bound_side(std::int32_t v, int d, int side, double half_width) {
+        const Eigen::Index q = 3 * Eigen::Index(v) + d;
+        const double limit = surface_.vertices(v, d) + side * half_width * surface_.grid.spacing[d];
+        double& bound = side < 0 ? lower_[q] : upper_[q];
+        if (bound == limit) return false;
+        bound = limit;
+        bounded_[std::size_t(v)] = 1;
+        changed_[std::size_t(v)] = 1;
+        any_bounds_ = true;
+        return true;
     }
 
     /// min E' over the part from the current positions, the rest held (sparse Cholesky or
@@ -626,15 +838,31 @@ private:
         part_system(part, matrix, b);
         gather(part, x);
         bool converged = true;
-        if (o_.clamp_half_width) {
+        if (any_bounds_ && std::any_of(part.begin(), part.end(), [&](std::int32_t v) { return bounded_[std::size_t(v)] != 0; })) {
             // From the current positions: inside the boxes and close to the minimizer (only the
             // strengthened rows changed), so the active set iterations need no ADMM phase to find
             // the active set (lobster: 4-5 factorizations instead of 50 ADMM iterations and 7).
+            // A vertex bounded this round may be outside its bounds: it starts on them.
             Eigen::VectorXd lower, upper;
-            clamp_bounds_of(part, lower, upper);
+            bounds_of(part, lower, upper);
+            x = x.cwiseMax(lower).cwiseMin(upper);
             BoxQpOptions qp = o_.qp;
             qp.admm_max_iterations = 0;
-            converged = solve_box_qp(matrix, b, lower, upper, x, qp).converged;
+            if (o_.clamp_half_width) {
+                converged = solve_box_qp(matrix, b, lower, upper, x, qp).converged;
+            } else if (is_small(part)) {
+                SimplicialHeldSolver held(matrix);
+                converged = detail::solve_box_qp_with(held, b, lower, upper, x, qp).converged;
+            } else {
+                // The voxels' bounds hold a few coordinates of a large part: the active set
+                // iterations by multigrid CG on the free coordinates, no factor (a CHOLMOD
+                // factorization per iteration took seconds on Al.100.vol's 20K-vertex parts).
+                qp.tolerance = std::max(qp.tolerance, tolerance);
+                const detail::AssembledSystem system(matrix);
+                const std::unique_ptr<detail::Multigrid> amg = system.multigrid(detail::AmgSettings{});
+                detail::IterativeHeldSolver held(system, *amg, kIterativePartIterations);
+                converged = detail::solve_box_qp_with(held, b, lower, upper, x, qp).converged;
+            }
         } else if (is_small(part)) {
             const Eigen::SimplicialLLT<SparseMatrix, Eigen::Lower> llt(matrix);
             if (llt.info() != Eigen::Success) throw Error("validity repair: a local system is not positive definite");
@@ -698,6 +926,12 @@ private:
     std::vector<char> junction_turn_;  ///< junction_turn_vertices, or empty (binary, grade_junction_turns)
     std::vector<char> in_region_;
     std::vector<char> corrected_;      ///< faces whose u was replaced
+    /// Bounds of each coordinate, interleaved (3i + d), ±∞ where free: the clamp boxes of the
+    /// reversible mode, the voxels' bounds (bound_around).
+    Eigen::VectorXd lower_, upper_;
+    std::vector<char> bounded_;  ///< per vertex: some coordinate has a finite bound
+    bool any_bounds_ = false;
+    std::unordered_map<std::int64_t, int> voxel_tries_;  ///< times each voxel was found wrong
     /// Vertices that moved, changed weight or hold, joined the region or touch a face whose field
     /// changed since the last exact solve of the region.
     std::vector<char> changed_;
@@ -767,7 +1001,18 @@ ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointM
     report.energy_before = regularization_energy(positions, surface.vertices, surface.quads, links, normals, weights);
     report.energy_after = report.energy_before;
     report.check_seconds = report.before.seconds;
-    if (report.before.valid() || options.max_rounds == 0) return result;
+    // Voxel centres on the wrong side (options.voxels; the reversible mode keeps them all).
+    std::optional<VoxelSides> sides;
+    std::vector<std::int64_t> wrong;
+    double voxel_seconds = 0;
+    if (options.voxels && !options.clamp_half_width) {
+        const auto started = Clock::now();
+        sides.emplace(*options.voxels, surface, positions);
+        wrong = sides->wrong();
+        voxel_seconds += seconds_since(started);
+        report.wrong_voxels_before = report.wrong_voxels_after = std::int64_t(wrong.size());
+    }
+    if ((report.before.valid() && wrong.empty()) || options.max_rounds == 0) return result;
 
     // Rounds on windows around what is invalid, then one exact solve of the whole region; again
     // if that solve undid the repair somewhere.
@@ -775,19 +1020,41 @@ ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointM
                   complex && !options.grade_junction_turns ? junction_turn_vertices(surface, edges) : std::vector<char>(),
                   normals, weights, positions, options);
     MeshValidity& validity = report.after;
-    const auto update = [&](const std::vector<std::int32_t>& moved, const std::vector<std::int32_t>& refield) {
-        tracker.update(repair.positions(), moved, refield, repair.field());
-        validity = tracker.validity();
+    // The wrong voxels to put back: not those left as noise (decided once per voxel).
+    std::unordered_map<std::int64_t, bool> noisy;
+    std::vector<std::int64_t> to_fix;
+    const auto update_voxels = [&](const PointMatrix& at, const std::vector<std::int32_t>& moved) {
+        if (!sides) return;
+        const auto started = Clock::now();
+        sides->update(at, moved);
+        wrong = sides->wrong();
+        voxel_seconds += seconds_since(started);
+        to_fix.clear();
+        for (const std::int64_t v : wrong) {
+            const auto [it, added] = noisy.try_emplace(v, false);
+            if (added) it->second = repair.noisy_voxel(*sides, v);
+            if (!it->second) to_fix.push_back(v);
+        }
     };
+    update_voxels(positions, {});
+    const auto update = [&](const std::vector<std::int32_t>& moved, const std::vector<std::int32_t>& refield) {
+        const PointMatrix at = repair.positions();
+        tracker.update(at, moved, refield, repair.field());
+        validity = tracker.validity();
+        update_voxels(at, moved);
+    };
+    const auto done = [&] { return validity.valid() && to_fix.empty(); };
     Eigen::VectorXd last_valid;
-    for (int exact_solves = 0; exact_solves < 3 && !validity.valid() && report.rounds < options.max_rounds; ++exact_solves) {
-        while (!validity.valid() && report.rounds < options.max_rounds) {
+    for (int exact_solves = 0; exact_solves < 3 && !done() && report.rounds < options.max_rounds; ++exact_solves) {
+        while (!done() && report.rounds < options.max_rounds) {
             report_progress(progress, "repair", -1,
                             "round " + std::to_string(report.rounds + 1) + ": " +
                                 std::to_string(validity.intersecting_pairs) + " intersecting pairs, " +
-                                std::to_string(validity.folded_faces) + " folded faces");
+                                std::to_string(validity.folded_faces) + " folded faces" +
+                                (sides ? ", " + std::to_string(to_fix.size()) + " voxel centres on the wrong side" : ""));
             std::vector<std::int32_t> moved, refield;
-            repair.round(validity, report, moved, refield);
+            const std::vector<std::int32_t> bounded = sides ? repair.bound_around(*sides, to_fix) : std::vector<std::int32_t>();
+            repair.round(validity, bounded, report, moved, refield);
             ++report.rounds;
             update(moved, refield);
         }
@@ -800,7 +1067,12 @@ ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointM
     }
     if (!validity.valid() && last_valid.size() > 0) update(repair.restore(last_valid), {});  // valid, not exact
     report.max_kkt_residual = repair.region_residual();
-    report.check_seconds = validity.seconds;
+    report.check_seconds = validity.seconds + voxel_seconds;
+    if (sides) {
+        report.wrong_voxels_after = std::int64_t(wrong.size());
+        report.noisy_wrong_voxels = std::int64_t(wrong.size() - to_fix.size());
+        report.bounded_vertices = repair.bounded_vertex_count();
+    }
     repair.finish(result);
     result.positions = repair.positions();
     result.normals = repair.field();
