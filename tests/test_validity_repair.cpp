@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <optional>
 #include <random>
 
 #include "dsreg/clamped_regularization.hpp"
@@ -524,15 +525,30 @@ TEST(ValidityRepair, RejectsInconsistentInput) {
     EXPECT_THROW(repair_validity(c.surface, c.field, RegularizationWeights{}, c.solved.positions, other_grid), Error);
 }
 
+/// The test name of a volume file: its name without ".vol", other than letters and digits as '_'.
+std::string volume_test_name(const ::testing::TestParamInfo<std::string>& info) {
+    std::string name = info.param.substr(0, info.param.find(".vol"));
+    for (char& ch : name)
+        if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+    return name;
+}
+
+/// The source of a volume of ../shared/data, or nothing when the file is not there.
+std::optional<VolumeSource> shared_volume(const std::string& name) {
+    const std::string path = std::string(DSREG_SHARED_DATA_DIR) + "/" + name;
+    if (!std::filesystem::exists(path)) return std::nullopt;
+    VolumeSource source;
+    source.input_path = path;
+    return source;
+}
+
 // The real volumes of ../shared/data with the default pipeline: the mesh users get is valid.
 class RealVolume : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(RealVolume, ComesOutValid) {
-    const std::string path = std::string(DSREG_SHARED_DATA_DIR) + "/" + GetParam();
-    if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " not present";
-    VolumeSource source;
-    source.input_path = path;
-    const PipelineResult result = run_pipeline(source, PipelineOptions{});
+    const std::optional<VolumeSource> source = shared_volume(GetParam());
+    if (!source) GTEST_SKIP() << GetParam() << " not in " << DSREG_SHARED_DATA_DIR;
+    const PipelineResult result = run_pipeline(*source, PipelineOptions{});
     ASSERT_TRUE(result.validity.has_value());
     const MeshValidity v = check_mesh_validity(result.regularization.positions, result.surface.quads, result.field.normals);
     EXPECT_EQ(v.intersecting_pairs, 0) << GetParam();
@@ -548,12 +564,7 @@ TEST_P(RealVolume, ComesOutValid) {
 
 INSTANTIATE_TEST_SUITE_P(SharedData, RealVolume,
                          ::testing::Values("cat10.vol", "bunny-64.vol", "Al.100.vol", "bunny-128.vol", "lobster.vol"),
-                         [](const ::testing::TestParamInfo<std::string>& info) {
-                             std::string name = info.param.substr(0, info.param.find(".vol"));
-                             for (char& ch : name)
-                                 if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
-                             return name;
-                         });
+                         volume_test_name);
 
 // --keep-voxels on the real volumes whose defaults leave more than 1 % of their object voxels
 // outside the mesh (docs/accuracy.md): every voxel centre left on the wrong side is one left as
@@ -561,11 +572,9 @@ INSTANTIATE_TEST_SUITE_P(SharedData, RealVolume,
 class RealVolumeKeepingVoxels : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(RealVolumeKeepingVoxels, PutsTheirVoxelCentresBackUnlessNoisyAndStaysValid) {
-    const std::string path = std::string(DSREG_SHARED_DATA_DIR) + "/" + GetParam();
-    if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " not present";
-    VolumeSource source;
-    source.input_path = path;
-    const LoadedVolume loaded = load_volume(source);
+    const std::optional<VolumeSource> source = shared_volume(GetParam());
+    if (!source) GTEST_SKIP() << GetParam() << " not in " << DSREG_SHARED_DATA_DIR;
+    const LoadedVolume loaded = load_volume(*source);
     PipelineOptions options;
     options.keep_voxels = true;
     const PipelineResult result = run_pipeline(loaded, options);
@@ -586,12 +595,7 @@ TEST_P(RealVolumeKeepingVoxels, PutsTheirVoxelCentresBackUnlessNoisyAndStaysVali
 }
 
 INSTANTIATE_TEST_SUITE_P(SharedData, RealVolumeKeepingVoxels, ::testing::Values("bunny-64.vol", "Al.100.vol"),
-                         [](const ::testing::TestParamInfo<std::string>& info) {
-                             std::string name = info.param.substr(0, info.param.find(".vol"));
-                             for (char& ch : name)
-                                 if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
-                             return name;
-                         });
+                         volume_test_name);
 
 }  // namespace
 }  // namespace dsreg
