@@ -42,6 +42,8 @@ using SparseMatrix = Eigen::SparseMatrix<double>;
 /// exactly before the repair ends), far less.
 constexpr double kExactPartTolerance = 1e-12;
 constexpr double kRoundPartTolerance = 1e-6;
+/// Pointel coordinates below this (per axis) make the keys of VoxelSides.
+constexpr std::int64_t kKeySide = std::int64_t(1) << 21;
 /// CG iterations allowed to each solve of a large bounded part (multigrid-preconditioned).
 constexpr int kIterativePartIterations = 500;
 
@@ -65,6 +67,9 @@ void check_inputs(const DigitalSurface& surface, const PointMatrix& normals, con
     if (o.voxels && (o.voxels->grid.dims != surface.grid.dims ||
                      std::int64_t(o.voxels->mask.size()) != o.voxels->grid.voxel_count()))
         throw Error("validity repair: the volume's grid is not the surface's");
+    if (o.voxels && *std::max_element(surface.grid.dims.begin(), surface.grid.dims.end()) >= kKeySide)
+        throw Error("validity repair: voxel centres can be kept on grids of fewer than " + std::to_string(kKeySide) +
+                    " voxels per axis");
 }
 
 /// The voxel centres a mesh puts on the wrong side (options.voxels), kept up to date as vertices
@@ -140,13 +145,16 @@ public:
     std::vector<std::int32_t> vertices_near(std::int64_t voxel, int reach) const {
         const Index3& dims = volume_.grid.dims;
         const std::int64_t i = voxel % dims[0], j = (voxel / dims[0]) % dims[1], k = voxel / (dims[0] * dims[1]);
+        // Pointels run from 0 to dims on each axis.
+        const auto low = [&](std::int64_t x) { return std::max<std::int64_t>(x - reach, 0); };
+        const auto high = [&](std::int64_t x, int d) { return std::min<std::int64_t>(x + 1 + reach, dims[d]); };
         std::vector<std::int32_t> vertices;
-        for (std::int64_t c = k - reach; c <= k + 1 + reach; ++c)
-            for (std::int64_t b = j - reach; b <= j + 1 + reach; ++b) {
+        for (std::int64_t c = low(k); c <= high(k, 2); ++c)
+            for (std::int64_t b = low(j); b <= high(j, 1); ++b) {
                 // Pointels of one (b, c) line are consecutive in key order.
                 const auto first = std::lower_bound(pointel_vertices_.begin(), pointel_vertices_.end(),
-                                                    std::make_pair(key(i - reach, b, c), std::int32_t(-1)));
-                const std::int64_t last = key(i + 1 + reach, b, c);
+                                                    std::make_pair(key(low(i), b, c), std::int32_t(-1)));
+                const std::int64_t last = key(high(i, 0), b, c);
                 for (auto it = first; it != pointel_vertices_.end() && it->first <= last; ++it) vertices.push_back(it->second);
             }
         std::sort(vertices.begin(), vertices.end());
@@ -154,12 +162,8 @@ public:
     }
 
 private:
-    /// Pointel coordinates run from 0 to dims (and a little beyond in the search): offset so
-    /// that the key orders pointels by (c, b, a).
-    static std::int64_t key(std::int64_t a, std::int64_t b, std::int64_t c) {
-        constexpr std::int64_t kSide = std::int64_t(1) << 21, kOffset = 8;
-        return (a + kOffset) + kSide * ((b + kOffset) + kSide * (c + kOffset));
-    }
+    /// Orders pointels by (c, b, a); coordinates from 0 to dims < kKeySide (check_inputs).
+    static std::int64_t key(std::int64_t a, std::int64_t b, std::int64_t c) { return a + kKeySide * (b + kKeySide * c); }
 
     const BinaryVolume& volume_;
     const DigitalSurface& surface_;
