@@ -185,7 +185,7 @@ check "a clean mesh is a valid solid" grep -q "; valid solid;" <<<"$("$DSREG" re
 # --keep-voxels: leopold's arms at h = 0.5 leave voxel centres on the wrong side; the repair puts
 # them all back (none of them is noise there) and says so.
 summary=$("$DSREG" regularize --shape leopold --h 0.5 -o "$work/leo4.obj" --keep-voxels --report "$work/leo4.json" 2>&1)
-check "--keep-voxels says what it put back" grep -Eq ", ([1-9][0-9]*) of \1 voxel centres put back on their side in [0-9]+ rounds" <<<"$summary"
+check "--keep-voxels says what it put back" grep -Eq ", ([1-9][0-9]*) of \1 voxel centres put back on their side in [0-9]+ rounds? " <<<"$summary"
 check "--keep-voxels report" python3 -c "import json,sys; v=json.load(open(sys.argv[1]))['validity']; sys.exit(0 if v['wrong_voxels_before'] > 0 and v['wrong_voxels_after'] == 0 and v['bounded_vertices'] > 0 and v['after']['valid'] else 1)" "$work/leo4.json"
 check "default: voxel centres not measured" python3 -c "import json,sys; v=json.load(open(sys.argv[1]))['validity']; sys.exit(0 if v['wrong_voxels_before'] == -1 else 1)" "$work/leo.json"
 # Label maps (--multi-label): every interface once with its two labels, one closed surface per label.

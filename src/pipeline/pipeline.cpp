@@ -83,7 +83,7 @@ std::string validity_text(const ValidityRepairReport& r, const RegularizationWei
                  std::to_string(r.wrong_voxels_before) + " voxel centres put back on their side";
     if (r.rounds == 0) return (r.before.valid() ? "valid solid" : validity_counts(r.before) + " (not repaired)") + voxels;
     std::string text = (r.before.valid() ? "valid solid" : "repaired " + validity_counts(r.before)) + voxels + " in " +
-                       std::to_string(r.rounds) + " rounds (" + std::to_string(r.region_vertices) +
+                       std::to_string(r.rounds) + (r.rounds == 1 ? " round (" : " rounds (") + std::to_string(r.region_vertices) +
                        " vertices, energy -> " + format("%.4g", r.energy_after.total(w)) + ")";
     if (!r.after.valid()) text += ", left " + validity_counts(r.after);
     return text;
