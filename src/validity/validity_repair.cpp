@@ -15,12 +15,14 @@
 #include <unordered_map>
 #include <vector>
 
+#include <Eigen/LU>
 #include <Eigen/SparseCholesky>
 #include <omp.h>
 
 // The block rows of R, computed one vertex at a time (an internal header of the regularization
 // module): the repair reads the rows of its region only, never the whole assembled matrix.
 #include "../regularization/blas_threads.hpp"
+#include "../regularization/conjugate_gradient.hpp"
 #include "../regularization/held_solver.hpp"
 #include "../regularization/regularization_operator.hpp"
 #include "dsreg/error.hpp"
@@ -46,6 +48,8 @@ constexpr double kRoundPartTolerance = 1e-6;
 constexpr std::int64_t kKeySide = std::int64_t(1) << 21;
 /// CG iterations allowed to each solve of a large bounded part (multigrid-preconditioned).
 constexpr int kIterativePartIterations = 500;
+/// Block-Jacobi CG iterations allowed to each solve of a large part in the rounds.
+constexpr int kBlockJacobiIterations = 400;
 
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
@@ -208,6 +212,82 @@ private:
     Eigen::VectorXd diagonal_;
     Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower> cholesky_;
     int factorizations_ = 0;
+};
+
+/// CG on R with the held coordinates decoupled (held_solver.hpp), preconditioned by its 3×3
+/// diagonal blocks (the held coordinates' rows and columns reduced to their diagonal): for the box
+/// QPs of the large parts in the rounds, which only steer the repair. No hierarchy to build, and
+/// a window's held boundary keeps its system well conditioned (as the unbounded parts of the
+/// rounds, solve_large_part).
+class BlockJacobiHeldSolver : public detail::HeldSolver {
+public:
+    BlockJacobiHeldSolver(const Eigen::SparseMatrix<double>& R, int max_iterations)
+        : R_(R), diagonal_(R.diagonal()), blocks_(std::size_t(R.rows() / 3), Eigen::Matrix3d::Zero()),
+          inverses_(blocks_.size()), held_(std::size_t(R.rows()), false), max_iterations_(max_iterations) {
+        Eigen::VectorXd row_sums = Eigen::VectorXd::Zero(R.rows());
+        for (Eigen::Index j = 0; j < R.outerSize(); ++j)
+            for (Eigen::SparseMatrix<double>::InnerIterator it(R, j); it; ++it) {
+                row_sums[it.row()] += std::abs(it.value());
+                if (it.row() / 3 == j / 3) blocks_[std::size_t(j / 3)](it.row() % 3, j % 3) = it.value();
+            }
+        infinity_norm_ = row_sums.size() ? row_sums.maxCoeff() : 0.0;
+        invert_blocks();
+    }
+    void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const override { y = R_ * x; }
+    const Eigen::VectorXd& diagonal() const override { return diagonal_; }
+    void hold(const std::vector<bool>& held) override {
+        held_ = held;
+        held_indices_.clear();
+        for (std::size_t q = 0; q < held.size(); ++q)
+            if (held[q]) held_indices_.push_back(Eigen::Index(q));
+        invert_blocks();
+    }
+    bool solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& y, double tolerance) override {
+        Eigen::VectorXd free_part;
+        const detail::LinearOperator held_product = [&](const Eigen::VectorXd& x, Eigen::VectorXd& out) {
+            free_part = x;
+            for (const Eigen::Index i : held_indices_) free_part[i] = 0;
+            out = R_ * free_part;
+            for (const Eigen::Index i : held_indices_) out[i] = diagonal_[i] * x[i];
+        };
+        const detail::Preconditioner block_jacobi = [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) {
+            z.resize(r.size());
+            for (std::size_t v = 0; v < inverses_.size(); ++v) z.segment<3>(3 * Eigen::Index(v)) = inverses_[v] * r.segment<3>(3 * Eigen::Index(v));
+        };
+        detail::CgStop stop;
+        stop.absolute_residual = tolerance;
+        stop.max_iterations = max_iterations_;
+        const detail::CgResult cg = detail::preconditioned_conjugate_gradient(held_product, infinity_norm_, rhs, y, block_jacobi, stop);
+        iterations_ += cg.iterations;
+        return cg.converged;
+    }
+    bool exact() const override { return false; }
+    int iterations() const override { return iterations_; }
+
+private:
+    /// The inverse of each diagonal block with its held rows and columns reduced to the diagonal.
+    void invert_blocks() {
+        for (std::size_t v = 0; v < blocks_.size(); ++v) {
+            Eigen::Matrix3d block = blocks_[v];
+            for (int d = 0; d < 3; ++d) {
+                if (!held_[3 * v + std::size_t(d)]) continue;
+                const double kept = block(d, d);
+                block.row(d).setZero();
+                block.col(d).setZero();
+                block(d, d) = kept;
+            }
+            inverses_[v] = block.inverse();
+        }
+    }
+
+    const Eigen::SparseMatrix<double>& R_;
+    Eigen::VectorXd diagonal_;
+    std::vector<Eigen::Matrix3d> blocks_, inverses_;
+    std::vector<bool> held_;
+    std::vector<Eigen::Index> held_indices_;
+    double infinity_norm_ = 0;
+    int max_iterations_;
+    int iterations_ = 0;
 };
 
 /// Disjoint sets of vertices (the connected parts of the region).
@@ -857,6 +937,10 @@ private:
             } else if (is_small(part)) {
                 SimplicialHeldSolver held(matrix);
                 converged = detail::solve_box_qp_with(held, b, lower, upper, x, qp).converged;
+            } else if (tolerance > kExactPartTolerance) {
+                qp.tolerance = std::max(qp.tolerance, tolerance);
+                BlockJacobiHeldSolver held(matrix, kBlockJacobiIterations);
+                converged = detail::solve_box_qp_with(held, b, lower, upper, x, qp).converged;
             } else {
                 // The voxels' bounds hold a few coordinates of a large part: the active set
                 // iterations by multigrid CG on the free coordinates, no factor (a CHOLMOD
@@ -892,7 +976,6 @@ private:
     /// the same residual leaves errors of 1e-9, which change with the number of threads). Whatever
     /// fails hands over to the next: multigrid CG from where CG stopped, then CHOLMOD.
     static void solve_large_part(const SparseMatrix& matrix, const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance) {
-        constexpr int kBlockJacobiIterations = 400;
         const Eigen::VectorXd start = x;
         SolverOptions solver;
         solver.tolerance = tolerance;
