@@ -110,6 +110,7 @@ struct ValidityRepairOptions {
     std::vector<char> noisy_voxels;  ///< per vertex (empty: none)
     double voxel_half_width = 0.499;
     int voxel_reach = 1;
+    int voxel_region_rings = 2;  ///< the region U grows this many rings around the bounded vertices (≥ region_rings)
 };
 
 struct ValidityRepairReport {

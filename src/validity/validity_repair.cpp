@@ -66,7 +66,8 @@ void check_inputs(const DigitalSurface& surface, const PointMatrix& normals, con
                     o.window_rings >= 0 && o.split_offset >= 0 && o.split_offset < 0.5 && o.field_margin >= 0 &&
                     o.field_margin < 1 && o.max_rounds >= 0 &&
                     (!o.clamp_half_width || (*o.clamp_half_width > o.split_offset && *o.clamp_half_width < 0.5)) &&
-                    o.voxel_half_width > o.split_offset && o.voxel_half_width < 0.5 && o.voxel_reach >= 0;
+                    o.voxel_half_width > o.split_offset && o.voxel_half_width < 0.5 && o.voxel_reach >= 0 &&
+                    o.voxel_region_rings >= 0;
     if (!ok) throw Error("validity repair: invalid options");
     if (o.voxels && (o.voxels->grid.dims != surface.grid.dims ||
                      std::int64_t(o.voxels->mask.size()) != o.voxels->grid.voxel_count()))
@@ -430,10 +431,17 @@ public:
         std::sort(strengthened.begin(), strengthened.end());
         strengthened.erase(std::unique(strengthened.begin(), strengthened.end()), strengthened.end());
         for (const std::int32_t v : strengthened) changed_[std::size_t(v)] = 1;
-        for (const std::int32_t v : rings_around(neighbours_, strengthened, o_.region_rings, mark_, [](std::int32_t) { return true; })) {
-            if (!in_region_[std::size_t(v)]) changed_[std::size_t(v)] = 1;  // a new unknown of its part
-            in_region_[std::size_t(v)] = 1;
-        }
+        const auto join_region = [&](const std::vector<std::int32_t>& seeds, int rings) {
+            for (const std::int32_t v : rings_around(neighbours_, seeds, rings, mark_, [](std::int32_t) { return true; })) {
+                if (!in_region_[std::size_t(v)]) changed_[std::size_t(v)] = 1;  // a new unknown of its part
+                in_region_[std::size_t(v)] = 1;
+            }
+        };
+        join_region(strengthened, o_.region_rings);
+        // The bounded vertices' region reaches further: where it stops, the mesh stays at p*, which
+        // the bounds have moved away from (a wider region brings the result nearer the minimizer
+        // of the whole mesh under the bounds).
+        if (!bounded.empty()) join_region(bounded, std::max(o_.region_rings, o_.voxel_region_rings));
         solve(rings_around(neighbours_, strengthened, o_.window_rings, mark_, [&](std::int32_t v) { return free_in_region(v); }),
               kRoundPartTolerance, report);
         report.solve_seconds += seconds_since(started);
