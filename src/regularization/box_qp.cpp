@@ -113,12 +113,7 @@ public:
     /// Factorizes R with the rows and columns of the held coordinates replaced by diag(R_ii):
     /// solving with it gives x_F = R_FF⁻¹ r_F and x_i = r_i / R_ii for held i.
     void factorize_held(const std::vector<bool>& held) {
-        for (Eigen::Index j = 0; j < R_.outerSize(); ++j) {
-            for (SparseMatrix::InnerIterator it(R_, j), out(work_, j); it; ++it, ++out) {
-                const bool masked = held[std::size_t(it.row())] || held[std::size_t(j)];
-                out.valueRef() = !masked ? it.value() : (it.row() == j ? it.value() : 0.0);
-            }
-        }
+        detail::mask_held(R_, held, work_);
         factorize(work_, "the free-variable submatrix R_FF");
     }
 
@@ -496,13 +491,19 @@ BoxQpReport solve_box_qp_with(HeldSolver& solver, const Eigen::VectorXd& b, cons
     return report;
 }
 
+void mask_held(const Eigen::SparseMatrix<double>& R, const std::vector<bool>& held, Eigen::SparseMatrix<double>& work) {
+    for (Eigen::Index j = 0; j < R.outerSize(); ++j)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(R, j), out(work, j); it; ++it, ++out) {
+            const bool masked = held[std::size_t(it.row())] || held[std::size_t(j)];
+            out.valueRef() = !masked ? it.value() : (it.row() == j ? it.value() : 0.0);
+        }
+}
+
 bool IterativeHeldSolver::solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& y, double tolerance) {
     Eigen::VectorXd free_part;
-    const LinearOperator held_product = [&](const Eigen::VectorXd& x, Eigen::VectorXd& out) {
-        free_part = x;
-        for (const Eigen::Index i : held_indices_) free_part[i] = 0;
-        system_.multiply(free_part, out);
-        for (const Eigen::Index i : held_indices_) out[i] = diagonal_[i] * x[i];
+    const LinearOperator product = [&](const Eigen::VectorXd& x, Eigen::VectorXd& out) {
+        held_product([&](const Eigen::VectorXd& y, Eigen::VectorXd& z) { system_.multiply(y, z); }, held_indices_, diagonal_, x,
+                     free_part, out);
     };
     const Preconditioner restricted_vcycle = [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) {
         multigrid_.apply(r, z);  // decouples free and held coordinates
@@ -511,7 +512,7 @@ bool IterativeHeldSolver::solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& y, 
     CgStop stop;
     stop.absolute_residual = tolerance;
     stop.max_iterations = max_iterations_;
-    const CgResult cg = preconditioned_conjugate_gradient(held_product, system_.infinity_norm(), rhs, y, restricted_vcycle, stop);
+    const CgResult cg = preconditioned_conjugate_gradient(product, system_.infinity_norm(), rhs, y, restricted_vcycle, stop);
     iterations_ += cg.iterations;
     return cg.converged;
 }

@@ -68,6 +68,20 @@ private:
     int iterations_ = 0;
 };
 
+/// `work` (R's pattern, compressed) = R with the rows and columns of the held coordinates
+/// reduced to their diagonal entries: R_held, for a factorization.
+void mask_held(const Eigen::SparseMatrix<double>& R, const std::vector<bool>& held, Eigen::SparseMatrix<double>& work);
+
+/// out = R_held x from a product with R: the held coordinates of x left out, their rows R_ii x_i.
+template <class Multiply>
+void held_product(const Multiply& multiply, const std::vector<Eigen::Index>& held_indices, const Eigen::VectorXd& diagonal,
+                  const Eigen::VectorXd& x, Eigen::VectorXd& free_part, Eigen::VectorXd& out) {
+    free_part = x;
+    for (const Eigen::Index i : held_indices) free_part[i] = 0;
+    multiply(free_part, out);
+    for (const Eigen::Index i : held_indices) out[i] = diagonal[i] * x[i];
+}
+
 /// Minimizes ½xᵀRx − bᵀx over the box from x (typically the unconstrained minimizer) with the
 /// active set iterations and the projected Newton fallback of box_qp.hpp (no ADMM) on `solver`.
 BoxQpReport solve_box_qp_with(HeldSolver& solver, const Eigen::VectorXd& b, const Eigen::VectorXd& lower,

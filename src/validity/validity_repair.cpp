@@ -147,6 +147,8 @@ public:
         return voxels;
     }
 
+    /// The vertices at the pointels within `reach` voxels of the cube of `voxel` (linear index):
+    /// pointels a with i − reach ≤ a ≤ i + 1 + reach on each axis, increasing.
     std::vector<std::int32_t> vertices_near(std::int64_t voxel, int reach) const {
         const Index3& dims = volume_.grid.dims;
         const std::int64_t i = voxel % dims[0], j = (voxel / dims[0]) % dims[1], k = voxel / (dims[0] * dims[1]);
@@ -192,11 +194,7 @@ public:
     void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const override { y = R_ * x; }
     const Eigen::VectorXd& diagonal() const override { return diagonal_; }
     void hold(const std::vector<bool>& held) override {
-        for (Eigen::Index j = 0; j < R_.outerSize(); ++j)
-            for (Eigen::SparseMatrix<double>::InnerIterator it(R_, j), out(work_, j); it; ++it, ++out) {
-                const bool masked = held[std::size_t(it.row())] || held[std::size_t(j)];
-                out.valueRef() = !masked ? it.value() : (it.row() == j ? it.value() : 0.0);
-            }
+        detail::mask_held(R_, held, work_);
         cholesky_.factorize(work_);
         ++factorizations_;
         if (cholesky_.info() != Eigen::Success) throw Error("validity repair: a local system is not positive definite");
@@ -245,11 +243,9 @@ public:
     }
     bool solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& y, double tolerance) override {
         Eigen::VectorXd free_part;
-        const detail::LinearOperator held_product = [&](const Eigen::VectorXd& x, Eigen::VectorXd& out) {
-            free_part = x;
-            for (const Eigen::Index i : held_indices_) free_part[i] = 0;
-            out = R_ * free_part;
-            for (const Eigen::Index i : held_indices_) out[i] = diagonal_[i] * x[i];
+        const detail::LinearOperator product = [&](const Eigen::VectorXd& x, Eigen::VectorXd& out) {
+            detail::held_product([&](const Eigen::VectorXd& y, Eigen::VectorXd& z) { z = R_ * y; }, held_indices_, diagonal_, x,
+                                 free_part, out);
         };
         const detail::Preconditioner block_jacobi = [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) {
             z.resize(r.size());
@@ -258,7 +254,7 @@ public:
         detail::CgStop stop;
         stop.absolute_residual = tolerance;
         stop.max_iterations = max_iterations_;
-        const detail::CgResult cg = detail::preconditioned_conjugate_gradient(held_product, infinity_norm_, rhs, y, block_jacobi, stop);
+        const detail::CgResult cg = detail::preconditioned_conjugate_gradient(product, infinity_norm_, rhs, y, block_jacobi, stop);
         iterations_ += cg.iterations;
         return cg.converged;
     }
@@ -405,7 +401,7 @@ public:
         return newly;
     }
 
-    /// Whether a voxel is left as noise: a vertex around it is one of smooth_first's.
+    /// Whether a voxel is left as noise: a vertex around it is one of noisy_voxels'.
     bool noisy_voxel(const VoxelSides& sides, std::int64_t voxel) const {
         for (const std::int32_t v : sides.vertices_near(voxel, o_.voxel_reach))
             if (std::size_t(v) < o_.noisy_voxels.size() && o_.noisy_voxels[std::size_t(v)]) return true;
