@@ -103,6 +103,11 @@ std::vector<std::uint8_t> voxel_centres_inside(const PointMatrix& vertices, cons
 void update_voxel_centres_inside(const PointMatrix& vertices, const FaceMatrix& triangles, const VoxelGrid& grid,
                                  const std::vector<char>& rows, std::vector<std::uint8_t>& inside);
 
+/// Flags in `rows` (index j + ny·k, ny·nz flags) the voxel rows whose ray may cross triangle t:
+/// those that voxel_centres_inside tests it against.
+void flag_rows_of_triangle(const PointMatrix& vertices, const FaceMatrix& triangles, Eigen::Index t, const VoxelGrid& grid,
+                           std::vector<char>& rows);
+
 // ---------------------------------------------------------------------------------------------
 // Ground truth of an implicit shape
 

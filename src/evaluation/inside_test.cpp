@@ -73,6 +73,22 @@ std::pair<std::int64_t, std::int64_t> row_range(double low, double high, double 
     return {lo, hi};
 }
 
+/// Calls visit(j + ny·k) for each voxel row (j, k) whose ray may cross triangle t.
+template <class Visit>
+void for_each_row_of_triangle(const PointMatrix& v, const FaceMatrix& triangles, Eigen::Index t, const VoxelGrid& grid,
+                              Visit visit) {
+    const std::int64_t ny = grid.dims[1], nz = grid.dims[2];
+    double y0 = v(triangles(t, 0), 1), y1 = y0, z0 = v(triangles(t, 0), 2), z1 = z0;
+    for (int k = 1; k < 3; ++k) {
+        y0 = std::min(y0, v(triangles(t, k), 1)), y1 = std::max(y1, v(triangles(t, k), 1));
+        z0 = std::min(z0, v(triangles(t, k), 2)), z1 = std::max(z1, v(triangles(t, k), 2));
+    }
+    const auto [j0, j1] = row_range(y0, y1, grid.origin.y(), grid.spacing.y(), ny);
+    const auto [k0, k1] = row_range(z0, z1, grid.origin.z(), grid.spacing.z(), nz);
+    for (std::int64_t k = k0; k <= k1; ++k)
+        for (std::int64_t j = j0; j <= j1; ++j) visit(j + ny * k);
+}
+
 /// The triangles bucketed by row; with `rows` (one flag per row j + ny·k), only those rows.
 RowBuckets bucket_triangles_by_row(const PointMatrix& v, const FaceMatrix& triangles, const VoxelGrid& grid,
                                    const std::vector<char>* rows = nullptr) {
@@ -80,16 +96,9 @@ RowBuckets bucket_triangles_by_row(const PointMatrix& v, const FaceMatrix& trian
     RowBuckets buckets;
     buckets.offsets.assign(std::size_t(ny * nz + 1), 0);
     auto for_each_row = [&](Eigen::Index t, auto&& visit) {
-        double y0 = v(triangles(t, 0), 1), y1 = y0, z0 = v(triangles(t, 0), 2), z1 = z0;
-        for (int k = 1; k < 3; ++k) {
-            y0 = std::min(y0, v(triangles(t, k), 1)), y1 = std::max(y1, v(triangles(t, k), 1));
-            z0 = std::min(z0, v(triangles(t, k), 2)), z1 = std::max(z1, v(triangles(t, k), 2));
-        }
-        const auto [j0, j1] = row_range(y0, y1, grid.origin.y(), grid.spacing.y(), ny);
-        const auto [k0, k1] = row_range(z0, z1, grid.origin.z(), grid.spacing.z(), nz);
-        for (std::int64_t k = k0; k <= k1; ++k)
-            for (std::int64_t j = j0; j <= j1; ++j)
-                if (!rows || (*rows)[std::size_t(j + ny * k)]) visit(j + ny * k);
+        for_each_row_of_triangle(v, triangles, t, grid, [&](std::int64_t row) {
+            if (!rows || (*rows)[std::size_t(row)]) visit(row);
+        });
     };
     for (Eigen::Index t = 0; t < triangles.rows(); ++t)
         for_each_row(t, [&](std::int64_t row) { buckets.offsets[std::size_t(row + 1)] += 1; });
@@ -165,6 +174,11 @@ std::vector<std::uint8_t> voxel_centres_inside(const PointMatrix& vertices, cons
     if (triangles.rows() == 0 || grid.voxel_count() == 0) return inside;
     classify_rows(vertices, triangles, grid, nullptr, inside);
     return inside;
+}
+
+void flag_rows_of_triangle(const PointMatrix& vertices, const FaceMatrix& triangles, Eigen::Index t, const VoxelGrid& grid,
+                           std::vector<char>& rows) {
+    for_each_row_of_triangle(vertices, triangles, t, grid, [&](std::int64_t row) { rows[std::size_t(row)] = 1; });
 }
 
 void update_voxel_centres_inside(const PointMatrix& vertices, const FaceMatrix& triangles, const VoxelGrid& grid,

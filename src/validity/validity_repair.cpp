@@ -107,24 +107,7 @@ public:
         quads.erase(std::unique(quads.begin(), quads.end()), quads.end());
         const VoxelGrid& grid = volume_.grid;
         std::vector<char> rows(std::size_t(grid.dims[1] * grid.dims[2]), 0);
-        const auto mark_rows = [&](std::int64_t t) {
-            double y0 = std::numeric_limits<double>::infinity(), y1 = -y0, z0 = y0, z1 = -y0;
-            for (int k = 0; k < 3; ++k) {
-                const std::int32_t v = triangles_(t, k);
-                y0 = std::min(y0, positions_(v, 1)), y1 = std::max(y1, positions_(v, 1));
-                z0 = std::min(z0, positions_(v, 2)), z1 = std::max(z1, positions_(v, 2));
-            }
-            // The rows whose centre line may meet the box, one more on each side against rounding.
-            const auto range = [](double low, double high, double origin, double spacing, std::int64_t count) {
-                const double first = std::floor((low - origin) / spacing) - 1, last = std::ceil((high - origin) / spacing) + 1;
-                return std::make_pair(std::int64_t(std::clamp(first, 0.0, double(count - 1))),
-                                      std::int64_t(std::clamp(last, 0.0, double(count - 1))));
-            };
-            const auto [j0, j1] = range(y0, y1, grid.origin.y(), grid.spacing.y(), grid.dims[1]);
-            const auto [k0, k1] = range(z0, z1, grid.origin.z(), grid.spacing.z(), grid.dims[2]);
-            for (std::int64_t k = k0; k <= k1; ++k)
-                for (std::int64_t j = j0; j <= j1; ++j) rows[std::size_t(j + grid.dims[1] * k)] = 1;
-        };
+        const auto mark_rows = [&](std::int64_t t) { flag_rows_of_triangle(positions_, triangles_, t, grid, rows); };
         for (const std::int32_t q : quads) mark_rows(2 * std::int64_t(q)), mark_rows(2 * std::int64_t(q) + 1);
         for (const std::int32_t v : moved) positions_.row(v) = positions.row(v);
         FaceMatrix moved_quads(Eigen::Index(quads.size()), 4);
@@ -385,7 +368,7 @@ public:
         upper_ = Eigen::VectorXd::Constant(n, std::numeric_limits<double>::infinity());
         bounded_.assign(std::size_t(surface.vertex_count()), 0);
         if (o_.clamp_half_width)
-            for (std::int64_t v = 0; v < surface.vertex_count(); ++v) bound(std::int32_t(v), 0b111, *o_.clamp_half_width);
+            for (std::int64_t v = 0; v < surface.vertex_count(); ++v) bound_box(std::int32_t(v), *o_.clamp_half_width);
     }
 
     /// Bounds the vertices around the voxels of `wrong` (VoxelSides, options.voxels): along the
@@ -882,13 +865,10 @@ private:
         }
     }
 
-    /// |x_v,d − p_v,d| ≤ half_width · s_d on the axes d of the mask `axes` (bit d).
-    void bound(std::int32_t v, int axes, double half_width) {
-        for (int d = 0; d < 3; ++d) {
-            if (!(axes & (1 << d))) continue;
-            bound_side(v, d, -1, half_width);
-            bound_side(v, d, 1, half_width);
-        }
+    /// |x_v,d − p_v,d| ≤ half_width · s_d on every axis d (the reversible mode's box).
+    void bound_box(std::int32_t v, double half_width) {
+        for (int d = 0; d < 3; ++d)
+            for (const int side : {-1, 1}) bound_side(v, d, side, half_width);
     }
 
     /// |x_v,a − p_v,a| ≤ voxel_half_width·s_a on the axis a of each face of v (one slab per
