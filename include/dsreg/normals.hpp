@@ -71,8 +71,11 @@ IntegralInvariantKernel parse_integral_invariant_kernel(const std::string& name)
 /// Integral-invariant normals (Pottmann et al.; the paper's ref. [5]): for each surfel centre c,
 /// the weighted covariance matrix of the centres of the object voxels whose centre lies in the
 /// ball B_r(c) (radius in physical units; weights given by `kernel`). The normal is the
-/// eigenvector of its smallest eigenvalue, oriented from the weighted centroid of those voxels
-/// towards c. Cost: O(r²/h²) per surfel (the ball is cut into voxel rows that carry running
+/// eigenvector of its smallest eigenvalue λ1, oriented from the weighted centroid of those voxels
+/// towards c; where the object is thinner than the ball across two directions (a wire, a bar, a
+/// thin tube, an isolated voxel: λ1 ≈ λ2, the eigenvector is any direction of their plane), the
+/// unit direction from the centroid to c, blended in linearly as the relative gap (λ2 − λ1)/λ2
+/// falls from 0.25 to 0 (a half ball has 0.70). Cost: O(r²/h²) per surfel (the ball is cut into voxel rows that carry running
 /// sums of the weights; each row is summed over its runs of object voxels with two look-ups per
 /// run), plus tables of O(r³/h³) entries. Throws dsreg::Error if radius is not positive and
 /// finite, or spans so many voxels (about 100) that the tables would exceed 768 MiB.

@@ -59,8 +59,9 @@ public:
 
     /// The normal of surfel s: eigenvector of the smallest eigenvalue of the weighted covariance
     /// of the centres of the voxels of `label` in its ball (rows of a grid of `dims`), oriented
-    /// from their centroid towards the surfel centre (the trivial normal when the ball holds no
-    /// weight).
+    /// from their centroid towards the surfel centre, blended with the direction from the centroid
+    /// where the two smallest eigenvalues are close (integral_invariant_normals, normals.hpp; the
+    /// trivial normal when the ball holds no weight).
     Eigen::Vector3d normal(const Index3& dims, const RowRuns& rows, const Surfel& s, std::uint32_t label) const;
 
     double radius() const { return radius_; }

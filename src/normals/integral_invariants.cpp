@@ -152,8 +152,20 @@ LatticeMoments ball_moments(const Index3& d, const RowRuns& rows, const Surfel& 
     return m;
 }
 
+/// Below this relative gap (λ2 − λ1)/λ2 between the two smallest eigenvalues of the covariance,
+/// its eigenvector of λ1 is blended with the centroid direction (normal_from_moments). A half
+/// ball has 0.70 (λ1 = 0.059 r², λ2 = r²/5); a wire, a bar or a voxel of debris thinner than the
+/// ball across two directions has 0: its cross-section is whole in the ball.
+constexpr double kEigenGapRamp = 0.25;
+
 /// The normal: eigenvector of the smallest eigenvalue of the covariance of the physical voxel
-/// centres (spacing ⊙ offsets), oriented from their centroid towards the surfel centre.
+/// centres (spacing ⊙ offsets), oriented from their centroid towards the surfel centre. Where the
+/// object is thinner than the ball across two directions (λ1 ≈ λ2), that eigenvector is any
+/// direction of their plane (an isolated voxel's y face got +x, and a thin tube's normals were
+/// over 20° off with a ball across it): there the direction from the centroid to the surfel
+/// centre is the estimator — radial on a wire, a bar or a tube, a face's own axis on an isolated
+/// voxel. The two are blended linearly over the relative gap (λ2 − λ1)/λ2 in [0, kEigenGapRamp],
+/// so that the field stays continuous; above it the eigenvector alone.
 Eigen::Vector3d normal_from_moments(const LatticeMoments& m, const Surfel& s, const Eigen::Vector3d& spacing) {
     const Eigen::Vector3d fallback = s.trivial_normal();
     if (!(m.n > 0)) return fallback;
@@ -173,6 +185,14 @@ Eigen::Vector3d normal_from_moments(const LatticeMoments& m, const Surfel& s, co
     const double outward = -to_centroid.dot(normal);
     const bool centroid_reliable = to_centroid.norm() > 1e-9 * spacing.maxCoeff();
     if ((centroid_reliable ? outward : fallback.dot(normal)) < 0) normal = -normal;
+    const Eigen::Vector3d l = eig.eigenvalues();  // ascending
+    const double gap = l[1] > 1e-12 * spacing.squaredNorm() ? (l[1] - l[0]) / l[1] : 0.0;
+    if (gap < kEigenGapRamp) {
+        const Eigen::Vector3d centroid_direction = centroid_reliable ? Eigen::Vector3d(-to_centroid.normalized()) : fallback;
+        const double w = gap / kEigenGapRamp;
+        const Eigen::Vector3d blended = w * normal + (1 - w) * centroid_direction;
+        if (blended.norm() > 1e-9) normal = blended.normalized();
+    }
     return normal;
 }
 
