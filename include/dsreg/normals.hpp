@@ -75,9 +75,12 @@ IntegralInvariantKernel parse_integral_invariant_kernel(const std::string& name)
 /// towards c; where the object is thinner than the ball across two directions (a wire, a bar, a
 /// thin tube, an isolated voxel: λ1 ≈ λ2, the eigenvector is any direction of their plane), the
 /// unit direction from the centroid to c, blended in linearly as the relative gap (λ2 − λ1)/λ2
-/// falls from 0.25 to 0 (a half ball has 0.70). Cost: O(r²/h²) per surfel (the ball is cut into voxel rows that carry running
-/// sums of the weights; each row is summed over its runs of object voxels with two look-ups per
-/// run), plus tables of O(r³/h³) entries. Throws dsreg::Error if radius is not positive and
+/// falls from 0.1 to 0 (a half ball has 0.70). Only the voxels of the face's own part of the
+/// object count: voxels joined to its voxel through faces, or through edges and corners where the
+/// surface joins them (another fragment a voxel away is not in its ball). Cost: O(r²/h²) per
+/// surfel (the ball is cut into voxel rows that carry running sums of the weights; each row is
+/// summed over its runs of object voxels with two look-ups per run), plus tables of O(r³/h³)
+/// entries. Throws dsreg::Error if radius is not positive and
 /// finite, or spans so many voxels (about 100) that the tables would exceed 768 MiB.
 PointMatrix integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface, double radius,
                                        IntegralInvariantKernel kernel = IntegralInvariantKernel::biweight);

@@ -47,8 +47,8 @@ PointMatrix normals_at_levels(const VoxelLabels& volume, const detail::RowRuns& 
 #pragma omp parallel for schedule(dynamic, 256)
         for (std::int64_t i = 0; i < n; ++i) {
             const std::int64_t f = faces[std::size_t(i)];
-            u.row(f) = ball.normal(volume.grid().dims, rows, surface.surfels[std::size_t(f)], detail::inner_label(surface, f))
-                           .transpose();
+            const Surfel& s = surface.surfels[std::size_t(f)];
+            u.row(f) = ball.normal(volume.grid().dims, rows, s, detail::run_label_at(rows, volume.grid().dims, s.voxel)).transpose();
         }
     }
     return u;
@@ -157,7 +157,7 @@ void smooth_field(const DigitalSurface& surface, PointMatrix& u, int steps, doub
 AdaptiveNormalField adaptive_integral_invariant_normals(const VoxelLabels& volume, const DigitalSurface& surface,
                                                         const AdaptiveNormalOptions& o) {
     check_options(o);
-    const detail::RowRuns rows = detail::build_row_runs(volume);
+    const detail::RowRuns rows = detail::build_part_runs(volume, surface);  // each face sums its own part
     const RadiusLevels levels{o.max_radius, o.min_radius, o.levels_per_octave};
     const std::int64_t m = surface.face_count();
     const int half_octave = o.levels_per_octave / 2;  // r/√2 is this many levels down (exactly for even counts)

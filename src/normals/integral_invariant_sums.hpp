@@ -29,8 +29,19 @@ struct RowRuns {
 
 RowRuns build_row_runs(const VoxelLabels& volume);
 
-/// The label whose indicator gives face f its normal: its inner label (1 on a binary surface).
-std::uint32_t inner_label(const DigitalSurface& surface, std::int64_t f);
+/// The runs of the volume labelled by connected part instead of by label (1, 2, …): voxels of one
+/// label are one part where they share a face, or where the surface joins them (their faces share
+/// a vertex: the connectivity's pairings, less the pinches kept apart). The integral invariants of
+/// a face sum the voxels of its own part only: another part a voxel or two away (a fragment of
+/// debris beside the main object, two blobs a one-voxel gap apart) is not the shape of this one,
+/// and seen through the ball it turned the normals of such fragments any way. The parts are those
+/// of the volume given: block by block (--block-size, dsreg-mpi), of the block with its halo, so
+/// two pieces within one ball that join only beyond the halo are apart there and one part in the
+/// whole volume. Throws dsreg::Error if a face's voxel is not in the volume's object.
+RowRuns build_part_runs(const VoxelLabels& volume, const DigitalSurface& surface);
+
+/// The label of the run that holds voxel v (0: none, the background), in O(log runs of its row).
+std::uint32_t run_label_at(const RowRuns& rows, const Index3& dims, const std::array<std::int32_t, 3>& v);
 
 /// Weighted sums over a prefix of a stencil row: Σ w, Σ w·t, Σ w·t².
 struct RowSums {

@@ -9,6 +9,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <string>
 
 #include "dsreg/error.hpp"
@@ -50,6 +51,99 @@ RowRuns build_row_runs(const VoxelLabels& volume) {
         result.labels.insert(result.labels.end(), per_row_labels[row].begin(), per_row_labels[row].end());
     }
     return result;
+}
+
+namespace {
+
+/// Union-find over run indices.
+class RunSets {
+public:
+    explicit RunSets(std::size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), std::int64_t(0)); }
+    std::int64_t find(std::int64_t x) {
+        while (parent_[std::size_t(x)] != x) x = parent_[std::size_t(x)] = parent_[std::size_t(parent_[std::size_t(x)])];
+        return x;
+    }
+    void unite(std::int64_t a, std::int64_t b) {
+        a = find(a), b = find(b);
+        if (a != b) parent_[std::size_t(std::max(a, b))] = std::min(a, b);
+    }
+
+private:
+    std::vector<std::int64_t> parent_;
+};
+
+/// Unites the runs of row `id` with those of row `other` that have the same label and share an x
+/// (6-adjacent voxels, the rows being adjacent); both rows' runs are sorted.
+void unite_adjacent_rows(const RowRuns& rows, std::int64_t id, std::int64_t other, RunSets& sets) {
+    std::int64_t q = rows.row_first[std::size_t(id)], r = rows.row_first[std::size_t(other)];
+    const std::int64_t q_end = rows.row_first[std::size_t(id + 1)], r_end = rows.row_first[std::size_t(other + 1)];
+    while (q < q_end && r < r_end) {
+        const auto& a = rows.runs[std::size_t(q)];
+        const auto& b = rows.runs[std::size_t(r)];
+        if (a[0] <= b[1] && b[0] <= a[1] && rows.labels[std::size_t(q)] == rows.labels[std::size_t(r)]) sets.unite(q, r);
+        if (a[1] < b[1]) ++q;
+        else ++r;
+    }
+}
+
+/// The index of the run that holds voxel v, or −1.
+std::int64_t run_at(const RowRuns& rows, const Index3& dims, const std::array<std::int32_t, 3>& v) {
+    const std::int64_t id = v[1] + dims[1] * std::int64_t(v[2]);
+    const auto begin = rows.runs.begin() + rows.row_first[std::size_t(id)];
+    const auto end = rows.runs.begin() + rows.row_first[std::size_t(id + 1)];
+    const auto run = std::lower_bound(begin, end, v[0], [](const std::array<std::int32_t, 2>& r, std::int32_t i) { return r[1] < i; });
+    return run == end || (*run)[0] > v[0] ? -1 : std::int64_t(run - rows.runs.begin());
+}
+
+}  // namespace
+
+RowRuns build_part_runs(const VoxelLabels& volume, const DigitalSurface& surface) {
+    RowRuns rows = build_row_runs(volume);
+    const Index3& d = volume.grid().dims;
+    RunSets sets(rows.runs.size());
+    // Voxels of one label sharing a face are one part whatever the connectivity.
+    for (std::int64_t k = 0; k < d[2]; ++k)
+        for (std::int64_t j = 0; j < d[1]; ++j) {
+            const std::int64_t id = j + d[1] * k;
+            if (j > 0) unite_adjacent_rows(rows, id, id - 1, sets);
+            if (k > 0) unite_adjacent_rows(rows, id, id - d[1], sets);
+        }
+    // Voxels touching along an edge or at a corner are one part where the surface joins them
+    // (the connectivity, less the pinches it keeps apart): their faces share a vertex. The
+    // faces of one label around a vertex are those of one umbrella of that label.
+    std::vector<std::int64_t> first_run(std::size_t(surface.vertex_count()), -1);
+    std::vector<std::pair<std::int64_t, std::int64_t>> other_label;  // (vertex, run) where labels meet
+    for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+        const std::int64_t q = run_at(rows, d, surface.surfels[std::size_t(f)].voxel);
+        if (q < 0) throw Error("integral invariants: the surface does not belong to the volume");
+        for (int c = 0; c < 4; ++c) {
+            const std::int64_t v = surface.quads(f, c);
+            std::int64_t& first = first_run[std::size_t(v)];
+            if (first < 0) first = q;
+            else if (rows.labels[std::size_t(first)] == rows.labels[std::size_t(q)]) sets.unite(first, q);
+            else other_label.emplace_back(v, q);
+        }
+    }
+    std::sort(other_label.begin(), other_label.end(), [&](const auto& a, const auto& b) {
+        return std::make_pair(a.first, rows.labels[std::size_t(a.second)]) < std::make_pair(b.first, rows.labels[std::size_t(b.second)]);
+    });
+    for (std::size_t i = 1; i < other_label.size(); ++i)
+        if (other_label[i].first == other_label[i - 1].first &&
+            rows.labels[std::size_t(other_label[i].second)] == rows.labels[std::size_t(other_label[i - 1].second)])
+            sets.unite(other_label[i].second, other_label[i - 1].second);
+    std::vector<std::uint32_t> part(rows.runs.size(), 0);
+    std::uint32_t parts = 0;
+    for (std::size_t q = 0; q < part.size(); ++q) {
+        const std::int64_t root = sets.find(std::int64_t(q));
+        part[q] = std::int64_t(q) == root ? ++parts : part[std::size_t(root)];  // a root precedes its set
+    }
+    rows.labels = std::move(part);
+    return rows;
+}
+
+std::uint32_t run_label_at(const RowRuns& rows, const Index3& dims, const std::array<std::int32_t, 3>& v) {
+    const std::int64_t q = run_at(rows, dims, v);
+    return q < 0 ? 0 : rows.labels[std::size_t(q)];
 }
 
 }  // namespace detail
@@ -155,8 +249,10 @@ LatticeMoments ball_moments(const Index3& d, const RowRuns& rows, const Surfel& 
 /// Below this relative gap (λ2 − λ1)/λ2 between the two smallest eigenvalues of the covariance,
 /// its eigenvector of λ1 is blended with the centroid direction (normal_from_moments). A half
 /// ball has 0.70 (λ1 = 0.059 r², λ2 = r²/5); a wire, a bar or a voxel of debris thinner than the
-/// ball across two directions has 0: its cross-section is whole in the ball.
-constexpr double kEigenGapRamp = 0.25;
+/// ball across two directions has 0: its cross-section is whole in the ball. 0.1 by the accuracy
+/// suite (docs/accuracy.md, "Parts thinner than the ball"): 0.25 gives leopold h = 0.5 better
+/// normals but 0.5 % of its voxel centres on the wrong side.
+constexpr double kEigenGapRamp = 0.1;
 
 /// The normal: eigenvector of the smallest eigenvalue of the covariance of the physical voxel
 /// centres (spacing ⊙ offsets), oriented from their centroid towards the surfel centre. Where the
@@ -237,23 +333,22 @@ Eigen::Vector3d IntegralInvariantBall::normal(const Index3& dims, const RowRuns&
     return normal_from_moments(m, s, spacing_);
 }
 
-std::uint32_t inner_label(const DigitalSurface& surface, std::int64_t f) {
-    return surface.face_labels.empty() ? 1u : surface.face_labels[std::size_t(f)].inner;
-}
-
 }  // namespace detail
 
 namespace {
 
 /// The field for one radius, from row runs built once by the caller: each face gets the normal
-/// of the indicator of its inner label (the object of a binary volume).
+/// of the indicator of its own part of its inner label (the object of a binary volume), from runs
+/// by part (build_part_runs).
 PointMatrix normals_from_runs(const VoxelGrid& grid, const RowRuns& rows, const DigitalSurface& surface,
                               double radius, IntegralInvariantKernel kernel) {
     const detail::IntegralInvariantBall ball(grid.spacing, radius, kernel);
     PointMatrix u(surface.face_count(), 3);
 #pragma omp parallel for schedule(dynamic, 256)
     for (std::int64_t f = 0; f < surface.face_count(); ++f)
-        u.row(f) = ball.normal(grid.dims, rows, surface.surfels[std::size_t(f)], detail::inner_label(surface, f)).transpose();
+        u.row(f) = ball.normal(grid.dims, rows, surface.surfels[std::size_t(f)],
+                               detail::run_label_at(rows, grid.dims, surface.surfels[std::size_t(f)].voxel))
+                       .transpose();
     return u;
 }
 
@@ -348,24 +443,24 @@ std::vector<char> faces_near_junctions(const LabelVolume& volume, const DigitalS
 
 PointMatrix integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface, double radius,
                                        IntegralInvariantKernel kernel) {
-    return normals_from_runs(volume.grid, detail::build_row_runs(volume), surface, radius, kernel);
+    return normals_from_runs(volume.grid, detail::build_part_runs(volume, surface), surface, radius, kernel);
 }
 
 PointMatrix integral_invariant_normals(const LabelVolume& volume, const DigitalSurface& surface, double radius,
                                        IntegralInvariantKernel kernel) {
     check_surface_labels(surface);
-    return normals_from_runs(volume.grid, detail::build_row_runs(volume), surface, radius, kernel);  // one pass, all labels
+    return normals_from_runs(volume.grid, detail::build_part_runs(volume, surface), surface, radius, kernel);  // one pass, all labels
 }
 
 PointMatrix extrapolated_integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface,
                                                     double radius, IntegralInvariantKernel kernel) {
-    return extrapolated_from_runs(volume.grid, detail::build_row_runs(volume), surface, radius, kernel);  // runs once for both radii
+    return extrapolated_from_runs(volume.grid, detail::build_part_runs(volume, surface), surface, radius, kernel);  // runs once for both radii
 }
 
 PointMatrix extrapolated_integral_invariant_normals(const LabelVolume& volume, const DigitalSurface& surface,
                                                     double radius, IntegralInvariantKernel kernel) {
     check_surface_labels(surface);
-    return extrapolated_from_runs(volume.grid, detail::build_row_runs(volume), surface, radius, kernel);
+    return extrapolated_from_runs(volume.grid, detail::build_part_runs(volume, surface), surface, radius, kernel);
 }
 
 }  // namespace dsreg
