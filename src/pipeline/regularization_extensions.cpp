@@ -25,12 +25,24 @@ constexpr int kNoiseRings = 3;
 /// their surfel on (docs/validity.md, "Voxel centres": 0.05 keeps the noisy cases' normals and
 /// puts bunny-64 and Al.100 over 99 % of their voxels; 0.1 costs the noisy thin torus 0.6°).
 constexpr double kNoisyVoxelShare = 0.05;
+/// The thin-part data weight falls linearly to none as the noise share ρ of a vertex rises to this
+/// (docs/accuracy.md, "Thin parts or noise"): noise makes the reach short everywhere, and a thin
+/// part's weight there pinned the mesh to the flipped voxels (noisy sphere9: 12.4° → 8.7°).
+constexpr double kThinPartNoiseShare = 0.2;
 
 /// --junction-turn-share and --junction-turn-weight when unset (docs/multi-label.md, "Turns of
 /// junction curves"): a turn held 0.39 voxel outside its chord (0.55 of the staircase's 0.71),
 /// its fairness weighing at least 0.3 β (10 γ with the default weights).
 constexpr double kDefaultJunctionTurnShare = 0.55;
 constexpr double kDefaultJunctionTurnWeight = 0.3;
+
+/// Thin-part multipliers m_i (thin_part_alpha) released where the surface is noisy:
+/// 1 + (m_i − 1)·max(0, 1 − ρ_i / kThinPartNoiseShare), ρ the noise share (none: unchanged).
+void release_thin_parts_where_noisy(const Eigen::VectorXd& share, Eigen::VectorXd& thin) {
+    if (share.size() == 0) return;
+    for (Eigen::Index v = 0; v < thin.size(); ++v)
+        thin[v] = 1 + (thin[v] - 1) * std::max(0.0, 1 - share[v] / kThinPartNoiseShare);
+}
 
 /// Where one local multiplier comes from.
 struct WeightSource {
@@ -123,6 +135,15 @@ nlohmann::json clamp_json(const RegularizationExtensions& o, const ClampedRegula
                                {"background_inside", clamped.background_inside}}}};
 }
 
+/// The share ρ of the faces within kNoiseRings rings of each vertex whose estimated normal points
+/// into the object (the noise fairness's, uncapped); empty when no face does.
+Eigen::VectorXd noise_share(const DigitalSurface& surface, const NormalField& field) {
+    if (field.faces_against_surfels.empty()) return {};
+    // With gain 1 and full share 1 the multiplier is 1 + ρ².
+    const Eigen::VectorXd multiplier = noise_fairness_gamma(surface, field.faces_against_surfels, 1.0, 1.0, kNoiseRings);
+    return (multiplier.array() - 1).max(0.0).sqrt().matrix();
+}
+
 }  // namespace
 
 double noise_fairness(const RegularizationExtensions& o) {
@@ -135,12 +156,9 @@ Eigen::VectorXd noise_multipliers(const RegularizationExtensions& o, const Digit
 }
 
 std::vector<char> noisy_voxel_vertices(const DigitalSurface& surface, const NormalField& field) {
-    if (field.faces_against_surfels.empty()) return {};
-    // With gain 1 and full share 1 the multiplier is 1 + ρ²: the share itself, uncapped.
-    const Eigen::VectorXd multiplier = noise_fairness_gamma(surface, field.faces_against_surfels, 1.0, 1.0, kNoiseRings);
-    std::vector<char> noisy(std::size_t(multiplier.size()), 0);
-    for (Eigen::Index v = 0; v < multiplier.size(); ++v)
-        noisy[std::size_t(v)] = multiplier[v] - 1 >= kNoisyVoxelShare * kNoisyVoxelShare;
+    const Eigen::VectorXd share = noise_share(surface, field);
+    std::vector<char> noisy(std::size_t(share.size()), 0);
+    for (Eigen::Index v = 0; v < share.size(); ++v) noisy[std::size_t(v)] = share[v] >= kNoisyVoxelShare;
     return noisy;
 }
 
@@ -235,6 +253,7 @@ Eigen::VectorXd apply_regularization_extensions(const RegularizationExtensions& 
     if (thin_parts.reach.size() > 0) {
         thin = thin_part_alpha(surface, thin_parts.reach, alpha_reach(o, surface.grid), thin_parts.sheetness,
                                sheet_alpha_reach(o, surface.grid));
+        release_thin_parts_where_noisy(noise_share(surface, field), thin);
         weights.vertex_alpha = weights.vertex_alpha.size() > 0 ? Eigen::VectorXd(weights.vertex_alpha.cwiseProduct(thin)) : thin;
     }
     validate_weights(weights, surface.vertex_count(), surface.face_count());
