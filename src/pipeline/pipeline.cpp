@@ -59,6 +59,7 @@ ThinParts thin_parts(const RegularizationExtensions& o, const VoxelLabels& volum
                                                        : surfel_reach(volume, surface, field.normals, cap);
     ThinParts parts;
     parts.reach = max_over_rings(surface, reach.smallest(), AdaptiveNormalOptions{}.reach_rings);
+    parts.wide_reach = max_over_rings(surface, reach.smallest(), kNoisyReachRings);
     if (sheet_alpha_reach(o, volume.grid()) != reference)
         parts.sheetness = thin_part_sheetness(volume, surface, field.normals, reach, reference);
     return parts;

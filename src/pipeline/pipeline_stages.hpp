@@ -39,8 +39,15 @@ double sheet_alpha_reach(const RegularizationExtensions& options, const VoxelGri
 
 /// What the thin-part data weights are made from: the faces' reach (empty: no thin-part
 /// weights) and, where the sheets get their own reference, the faces' sheetness (else empty).
+/// Rings over which ThinParts::wide_reach takes the largest reach (8 by the accuracy suite's noisy
+/// cases: 16 gave the same, docs/accuracy.md "Thin parts or noise").
+constexpr int kNoisyReachRings = 8;
+
 struct ThinParts {
     Eigen::VectorXd reach, sheetness;
+    /// The reach over a wider neighbourhood, taken where the surface is noisy (noise shortens
+    /// every reach around it: apply_regularization_extensions).
+    Eigen::VectorXd wide_reach;
 };
 
 /// The report's energy object: the three terms of eq. (1) without their weights, and the total.

@@ -25,9 +25,10 @@ constexpr int kNoiseRings = 3;
 /// their surfel on (docs/validity.md, "Voxel centres": 0.05 keeps the noisy cases' normals and
 /// puts bunny-64 and Al.100 over 99 % of their voxels; 0.1 costs the noisy thin torus 0.6°).
 constexpr double kNoisyVoxelShare = 0.05;
-/// The thin-part data weight falls linearly to none as the noise share ρ of a vertex rises to this
-/// (docs/accuracy.md, "Thin parts or noise"): noise makes the reach short everywhere, and a thin
-/// part's weight there pinned the mesh to the flipped voxels (noisy sphere9: 12.4° → 8.7°).
+/// Where the noise share ρ of a face reaches this, its thin-part weight takes the reach over
+/// kNoisyReachRings rings instead of the adaptive field's 3 (docs/accuracy.md, "Thin parts or
+/// noise"): noise makes every reach short, and a thin part's weight there pinned the mesh to the
+/// flipped voxels (noisy sphere9: 12.4° → 8.2°).
 constexpr double kThinPartNoiseShare = 0.2;
 
 /// --junction-turn-share and --junction-turn-weight when unset (docs/multi-label.md, "Turns of
@@ -36,12 +37,17 @@ constexpr double kThinPartNoiseShare = 0.2;
 constexpr double kDefaultJunctionTurnShare = 0.55;
 constexpr double kDefaultJunctionTurnWeight = 0.3;
 
-/// Thin-part multipliers m_i (thin_part_alpha) released where the surface is noisy:
-/// 1 + (m_i − 1)·max(0, 1 − ρ_i / kThinPartNoiseShare), ρ the noise share (none: unchanged).
-void release_thin_parts_where_noisy(const Eigen::VectorXd& share, Eigen::VectorXd& thin) {
-    if (share.size() == 0) return;
-    for (Eigen::Index v = 0; v < thin.size(); ++v)
-        thin[v] = 1 + (thin[v] - 1) * std::max(0.0, 1 - share[v] / kThinPartNoiseShare);
+/// The faces' reach for the thin-part weights: the reach over kNoisyReachRings rings where the
+/// surface is noisy, blended in as the noise share ρ of the face (mean of its vertices') rises to
+/// kThinPartNoiseShare: a part thin only because of its flipped voxels is thick over a wider
+/// neighbourhood, a thin part stays thin.
+Eigen::VectorXd reach_beyond_noise(const DigitalSurface& surface, const ThinParts& parts, const Eigen::VectorXd& share) {
+    Eigen::VectorXd reach = parts.reach;
+    if (share.size() == 0 || parts.wide_reach.size() != reach.size()) return reach;
+    const Eigen::VectorXd face_share = face_means(surface.quads, share);
+    for (Eigen::Index f = 0; f < reach.size(); ++f)
+        reach[f] += (parts.wide_reach[f] - reach[f]) * std::min(1.0, face_share[f] / kThinPartNoiseShare);
+    return reach;
 }
 
 /// Where one local multiplier comes from.
@@ -251,9 +257,8 @@ Eigen::VectorXd apply_regularization_extensions(const RegularizationExtensions& 
     hold_junction_turns(o, surface, weights);
     Eigen::VectorXd thin;
     if (thin_parts.reach.size() > 0) {
-        thin = thin_part_alpha(surface, thin_parts.reach, alpha_reach(o, surface.grid), thin_parts.sheetness,
-                               sheet_alpha_reach(o, surface.grid));
-        release_thin_parts_where_noisy(noise_share(surface, field), thin);
+        thin = thin_part_alpha(surface, reach_beyond_noise(surface, thin_parts, noise_share(surface, field)),
+                               alpha_reach(o, surface.grid), thin_parts.sheetness, sheet_alpha_reach(o, surface.grid));
         weights.vertex_alpha = weights.vertex_alpha.size() > 0 ? Eigen::VectorXd(weights.vertex_alpha.cwiseProduct(thin)) : thin;
     }
     validate_weights(weights, surface.vertex_count(), surface.face_count());
