@@ -80,8 +80,8 @@ IntegralInvariantKernel parse_integral_invariant_kernel(const std::string& name)
 /// surface joins them (another fragment a voxel away is not in its ball). Cost: O(r²/h²) per
 /// surfel (the ball is cut into voxel rows that carry running sums of the weights; each row is
 /// summed over its runs of object voxels with two look-ups per run), plus tables of O(r³/h³)
-/// entries. Throws dsreg::Error if radius is not positive and
-/// finite, or spans so many voxels (about 100) that the tables would exceed 768 MiB.
+/// entries. Throws dsreg::Error if radius is not positive and finite, or spans so many voxels
+/// (about 100) that the tables would exceed 768 MiB.
 PointMatrix integral_invariant_normals(const BinaryVolume& volume, const DigitalSurface& surface, double radius,
                                        IntegralInvariantKernel kernel = IntegralInvariantKernel::biweight);
 

@@ -37,12 +37,12 @@ double thin_part_reach_cap(const RegularizationExtensions& options, const VoxelG
 /// voxels).
 double sheet_alpha_reach(const RegularizationExtensions& options, const VoxelGrid& grid);
 
-/// What the thin-part data weights are made from: the faces' reach (empty: no thin-part
-/// weights) and, where the sheets get their own reference, the faces' sheetness (else empty).
 /// Rings over which ThinParts::wide_reach takes the largest reach (8 by the accuracy suite's noisy
 /// cases: 16 gave the same, docs/accuracy.md "Thin parts or noise").
 constexpr int kNoisyReachRings = 8;
 
+/// What the thin-part data weights are made from: the faces' reach (empty: no thin-part
+/// weights) and, where the sheets get their own reference, the faces' sheetness (else empty).
 struct ThinParts {
     Eigen::VectorXd reach, sheetness;
     /// The reach over a wider neighbourhood, taken where the surface is noisy (noise shortens
