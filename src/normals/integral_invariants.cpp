@@ -9,9 +9,9 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <string>
 
+#include "../common/disjoint_sets.hpp"
 #include "dsreg/error.hpp"
 #include "dsreg/normals.hpp"
 #include "integral_invariant_sums.hpp"
@@ -55,26 +55,9 @@ RowRuns build_row_runs(const VoxelLabels& volume) {
 
 namespace {
 
-/// Union-find over run indices.
-class RunSets {
-public:
-    explicit RunSets(std::size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), std::int64_t(0)); }
-    std::int64_t find(std::int64_t x) {
-        while (parent_[std::size_t(x)] != x) x = parent_[std::size_t(x)] = parent_[std::size_t(parent_[std::size_t(x)])];
-        return x;
-    }
-    void unite(std::int64_t a, std::int64_t b) {
-        a = find(a), b = find(b);
-        if (a != b) parent_[std::size_t(std::max(a, b))] = std::min(a, b);
-    }
-
-private:
-    std::vector<std::int64_t> parent_;
-};
-
 /// Unites the runs of row `id` with those of row `other` that have the same label and share an x
 /// (6-adjacent voxels, the rows being adjacent); both rows' runs are sorted.
-void unite_adjacent_rows(const RowRuns& rows, std::int64_t id, std::int64_t other, RunSets& sets) {
+void unite_adjacent_rows(const RowRuns& rows, std::int64_t id, std::int64_t other, DisjointSets& sets) {
     std::int64_t q = rows.row_first[std::size_t(id)], r = rows.row_first[std::size_t(other)];
     const std::int64_t q_end = rows.row_first[std::size_t(id + 1)], r_end = rows.row_first[std::size_t(other + 1)];
     while (q < q_end && r < r_end) {
@@ -100,7 +83,7 @@ std::int64_t run_at(const RowRuns& rows, const Index3& dims, const std::array<st
 RowRuns build_part_runs(const VoxelLabels& volume, const DigitalSurface& surface) {
     RowRuns rows = build_row_runs(volume);
     const Index3& d = volume.grid().dims;
-    RunSets sets(rows.runs.size());
+    DisjointSets sets(rows.runs.size());
     // Voxels of one label sharing a face are one part whatever the connectivity.
     for (std::int64_t k = 0; k < d[2]; ++k)
         for (std::int64_t j = 0; j < d[1]; ++j) {

@@ -21,6 +21,7 @@
 
 // The block rows of R, computed one vertex at a time (an internal header of the regularization
 // module): the repair reads the rows of its region only, never the whole assembled matrix.
+#include "../common/disjoint_sets.hpp"
 #include "../regularization/blas_threads.hpp"
 #include "../regularization/conjugate_gradient.hpp"
 #include "../regularization/held_solver.hpp"
@@ -268,23 +269,6 @@ private:
     double infinity_norm_ = 0;
     int max_iterations_;
     int iterations_ = 0;
-};
-
-/// Disjoint sets of vertices (the connected parts of the region).
-class Parts {
-public:
-    explicit Parts(std::size_t size) : parent_(size) { std::iota(parent_.begin(), parent_.end(), 0); }
-    std::int64_t find(std::int64_t x) {
-        while (parent_[std::size_t(x)] != x) x = parent_[std::size_t(x)] = parent_[std::size_t(parent_[std::size_t(x)])];
-        return x;
-    }
-    void unite(std::int64_t a, std::int64_t b) {
-        a = find(a), b = find(b);
-        if (a != b) parent_[std::size_t(std::max(a, b))] = std::min(a, b);
-    }
-
-private:
-    std::vector<std::int64_t> parent_;
 };
 
 /// The neighbours of each vertex across every edge of the mesh, both ways, in increasing order.
@@ -612,7 +596,7 @@ private:
     void solve(const std::vector<std::int32_t>& vertices, double tolerance, ValidityRepairReport& report,
                bool skip_unchanged = false) {
         for (const std::int32_t v : vertices) mark_[std::size_t(v)] = 1;
-        Parts parts(mark_.size());
+        detail::DisjointSets parts(mark_.size());  // the connected parts of the region
         std::vector<char> touched(vertices.size(), 0);  ///< the vertex or one coupled to it changed
         detail::RegularizationOperator::Row& row = row_scratch_.front();
         for (std::size_t k = 0; k < vertices.size(); ++k) {
