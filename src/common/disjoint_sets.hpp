@@ -1,5 +1,7 @@
-// dsreg — internal: disjoint sets of the indices 0 … n − 1 (union-find with path halving; the
-// smaller index is the root, so a set's root is its first member).
+// dsreg — internal: disjoint sets of the indices 0 … n − 1 (union-find with path halving). The
+// smallest index of a set is its root, whatever the order of the unions, so results never depend
+// on it. `Index`: the stored type (std::uint32_t where the sets number in the tens of millions
+// and memory counts, as for the surface's face corners).
 #pragma once
 
 #include <algorithm>
@@ -10,22 +12,25 @@
 
 namespace dsreg::detail {
 
+template <class Index = std::int64_t>
 class DisjointSets {
 public:
-    explicit DisjointSets(std::size_t size) : parent_(size) { std::iota(parent_.begin(), parent_.end(), std::int64_t(0)); }
+    explicit DisjointSets(std::size_t size) : parent_(size) { std::iota(parent_.begin(), parent_.end(), Index(0)); }
 
-    std::int64_t find(std::int64_t x) {
+    Index find(Index x) {
         while (parent_[std::size_t(x)] != x) x = parent_[std::size_t(x)] = parent_[std::size_t(parent_[std::size_t(x)])];
         return x;
     }
 
-    void unite(std::int64_t a, std::int64_t b) {
+    void unite(Index a, Index b) {
         a = find(a), b = find(b);
         if (a != b) parent_[std::size_t(std::max(a, b))] = std::min(a, b);
     }
 
+    std::size_t size() const { return parent_.size(); }
+
 private:
-    std::vector<std::int64_t> parent_;
+    std::vector<Index> parent_;
 };
 
 }  // namespace dsreg::detail

@@ -57,7 +57,7 @@ namespace {
 
 /// Unites the runs of row `id` with those of row `other` that have the same label and share an x
 /// (6-adjacent voxels, the rows being adjacent); both rows' runs are sorted.
-void unite_adjacent_rows(const RowRuns& rows, std::int64_t id, std::int64_t other, DisjointSets& sets) {
+void unite_adjacent_rows(const RowRuns& rows, std::int64_t id, std::int64_t other, DisjointSets<>& sets) {
     std::int64_t q = rows.row_first[std::size_t(id)], r = rows.row_first[std::size_t(other)];
     const std::int64_t q_end = rows.row_first[std::size_t(id + 1)], r_end = rows.row_first[std::size_t(other + 1)];
     while (q < q_end && r < r_end) {
@@ -83,7 +83,7 @@ std::int64_t run_at(const RowRuns& rows, const Index3& dims, const std::array<st
 RowRuns build_part_runs(const VoxelLabels& volume, const DigitalSurface& surface) {
     RowRuns rows = build_row_runs(volume);
     const Index3& d = volume.grid().dims;
-    DisjointSets sets(rows.runs.size());
+    DisjointSets<> sets(rows.runs.size());
     // Voxels of one label sharing a face are one part whatever the connectivity.
     for (std::int64_t k = 0; k < d[2]; ++k)
         for (std::int64_t j = 0; j < d[1]; ++j) {

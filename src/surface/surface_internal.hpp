@@ -4,39 +4,17 @@
 
 #include <array>
 #include <cstdint>
-#include <numeric>
 #include <vector>
 
+#include "../common/disjoint_sets.hpp"
 #include "dsreg/digital_surface.hpp"
 
 namespace dsreg::surface_detail {
 
 using Pointel = std::array<std::int64_t, 3>;
 
-/// Disjoint sets with path halving; the smallest index of a set is its root, whatever the order
-/// of the unions (so results never depend on it).
-class UnionFind {
-public:
-    explicit UnionFind(std::size_t size) : parent_(size) { std::iota(parent_.begin(), parent_.end(), 0u); }
-    std::uint32_t find(std::uint32_t x) {
-        while (parent_[x] != x) {
-            parent_[x] = parent_[parent_[x]];
-            x = parent_[x];
-        }
-        return x;
-    }
-    void unite(std::uint32_t a, std::uint32_t b) {
-        a = find(a);
-        b = find(b);
-        if (a == b) return;
-        if (a < b) std::swap(a, b);
-        parent_[a] = b;  // the smaller index stays root
-    }
-    std::size_t size() const { return parent_.size(); }
-
-private:
-    std::vector<std::uint32_t> parent_;
-};
+/// Corners, faces and components number in the tens of millions: 32-bit sets.
+using UnionFind = detail::DisjointSets<std::uint32_t>;
 
 /// Corner offsets (along the two tangent axes b = axis+1, c = axis+2) listed counter-clockwise
 /// seen from outside: e_b × e_c = e_axis, so (0,0),(1,0),(1,1),(0,1) turns positively around

@@ -19,9 +19,9 @@
 #include <Eigen/SparseCholesky>
 #include <omp.h>
 
+#include "../common/disjoint_sets.hpp"
 // The block rows of R, computed one vertex at a time (an internal header of the regularization
 // module): the repair reads the rows of its region only, never the whole assembled matrix.
-#include "../common/disjoint_sets.hpp"
 #include "../regularization/blas_threads.hpp"
 #include "../regularization/conjugate_gradient.hpp"
 #include "../regularization/held_solver.hpp"
@@ -596,7 +596,7 @@ private:
     void solve(const std::vector<std::int32_t>& vertices, double tolerance, ValidityRepairReport& report,
                bool skip_unchanged = false) {
         for (const std::int32_t v : vertices) mark_[std::size_t(v)] = 1;
-        detail::DisjointSets parts(mark_.size());  // the connected parts of the region
+        detail::DisjointSets<> parts(mark_.size());  // the connected parts of the region
         std::vector<char> touched(vertices.size(), 0);  ///< the vertex or one coupled to it changed
         detail::RegularizationOperator::Row& row = row_scratch_.front();
         for (std::size_t k = 0; k < vertices.size(); ++k) {
