@@ -23,6 +23,10 @@ struct ValueHistogram {
     /// data needs no second pass (read_value_histogram).
     std::vector<std::int64_t> exact_counts;
     std::int64_t exact_limit = 0;
+    /// The last value added and its slot (in exact_counts, then in bins; −1: none), so that a run
+    /// of equal values, the bulk of a label map or a mask, costs one increment per value.
+    double last_value = 0;
+    std::int64_t last_slot = -1;
 
     /// While `bins` is empty: extends min, max, integral, count, exact_counts. Then: counts
     /// `value` in its bin.

@@ -31,7 +31,17 @@ void count_exactly(std::vector<std::int64_t>& counts, double value, double old_m
 }  // namespace
 
 void ValueHistogram::add(double value) {
+    if (last_slot >= 0 && value == last_value) {  // the same value again: the same slot, nothing else changes
+        if (!bins.empty()) {
+            ++bins[static_cast<std::size_t>(last_slot)];
+            return;
+        }
+        ++count;
+        if (!exact_counts.empty()) ++exact_counts[static_cast<std::size_t>(last_slot)];
+        return;
+    }
     if (std::isnan(value)) return;
+    last_value = value;
     if (bins.empty()) {
         if (count == 0) min = max = value;
         const double old_min = min;
@@ -41,12 +51,13 @@ void ValueHistogram::add(double value) {
         integral = integral && value == std::floor(value);
         ++count;
         if (counting) count_exactly(exact_counts, value, old_min, min, max, integral, exact_limit);
+        last_slot = exact_counts.empty() ? 0 : static_cast<std::int64_t>(value - min);
         return;
     }
     const double position = (value - min) / bin_width;
     const auto last = static_cast<std::int64_t>(bins.size()) - 1;
-    const std::int64_t bin = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor(position)), 0, last);
-    ++bins[static_cast<std::size_t>(bin)];
+    last_slot = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor(position)), 0, last);
+    ++bins[static_cast<std::size_t>(last_slot)];
 }
 
 ValueHistogram read_value_histogram(const std::string& path, const RawVolumeLayout* raw_layout, const VolumeLimits& limits,
@@ -69,6 +80,7 @@ ValueHistogram read_value_histogram(const std::string& path, const RawVolumeLayo
     const std::size_t bins = one_per_value ? static_cast<std::size_t>(span + 1) : static_cast<std::size_t>(std::max(1, max_bins));
     histogram.bin_width = one_per_value ? 1.0 : std::max(span / double(bins), std::numeric_limits<double>::min());
     histogram.bins.assign(bins, 0);
+    histogram.last_slot = -1;  // the slots of the first pass were those of exact_counts
     VoxelDestination counts = VoxelDestination::statistics(histogram);
     volume_io_detail::read_volume_voxels(path, raw_layout, limits, counts);
     return histogram;
