@@ -203,8 +203,9 @@ LatticeMoments ball_moments(const Index3& d, const RowRuns& rows, const Surfel& 
         const RowSums* prefix = stencil.prefix_sums.data() + row.prefix;
         RowSums sum;
         for (std::int64_t q = rows.row_first[std::size_t(id)]; q < rows.row_first[std::size_t(id + 1)]; ++q) {
-            if (rows.labels[std::size_t(q)] != label) continue;
             const auto& run = rows.runs[std::size_t(q)];
+            if (run[0] - i0 > row.t_hi) break;  // runs in x order: the rest lie beyond the ball
+            if (rows.labels[std::size_t(q)] != label) continue;
             const std::int64_t lo = std::max<std::int64_t>(run[0] - i0, row.t_lo);
             const std::int64_t hi = std::min<std::int64_t>(run[1] - i0, row.t_hi);
             if (lo > hi) continue;
