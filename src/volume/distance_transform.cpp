@@ -66,6 +66,36 @@ void lower_envelope(const double* in, double* out, std::int64_t n, double w, boo
     }
 }
 
+/// The first pass, along x, on the initial values, which are binary (a target 0, the others
+/// ±limit): the lower envelope of parabolas of value 0 is that of the nearest target, so two
+/// sweeps give each voxel its nearest target along the line and the value w·d² the envelope gives
+/// (the same double expression, capped the same; limit where the line holds no target). Kind 1
+/// voxels take the background as target, the border included: object voxels of other_kind
+/// (negative) and the non-targets of DistanceTarget::background; kind 0 voxels take the object, no
+/// border: background voxels of other_kind and the non-targets of DistanceTarget::object.
+void binary_line(double* line, std::int64_t n, double w, DistanceTarget target, double limit, std::vector<double>& before) {
+    constexpr double kFar = std::numeric_limits<double>::infinity();
+    const bool two_kinds = target == DistanceTarget::other_kind;
+    const auto kind_of = [&](std::int64_t q) { return two_kinds ? int(std::signbit(line[q])) : int(target == DistanceTarget::background); };
+    const auto is_target_of = [&](std::int64_t q, int kind) { return two_kinds ? int(std::signbit(line[q])) != kind : line[q] == 0; };
+    double last[2] = {-kFar, -1.0};  // the last target of each kind so far; kind 1 sees the border at −1
+    before.resize(std::size_t(n));
+    for (std::int64_t q = 0; q < n; ++q) {
+        for (int kind = 0; kind < 2; ++kind)
+            if (is_target_of(q, kind)) last[kind] = double(q);
+        before[std::size_t(q)] = double(q) - last[kind_of(q)];
+    }
+    double next[2] = {kFar, double(n)};
+    for (std::int64_t q = n - 1; q >= 0; --q) {
+        for (int kind = 0; kind < 2; ++kind)
+            if (is_target_of(q, kind)) next[kind] = double(q);
+        const int kind = kind_of(q);
+        const double d = std::min(before[std::size_t(q)], next[kind] - double(q));
+        const double squared = std::min(limit, w * d * d);  // 0 on a target, limit where there is none
+        line[q] = two_kinds && kind == 1 ? -squared : squared;
+    }
+}
+
 /// Lines gathered together in a pass along y or z: consecutive lines along x, so that every
 /// cache line read from the volume serves them all (one line at a stride of nx or nx·ny floats
 /// would use 4 bytes of each 64-byte cache line).
@@ -89,7 +119,9 @@ void two_sided_envelope(double* line, double* to_background, double* to_object, 
 
 /// One pass along `axis` over every line of the grid, in place on `squared`. Along y and z, the
 /// lines are taken in tiles of kLinesPerTile neighbours along x, copied to contiguous work space.
-void pass_along(std::vector<float>& squared, const VoxelGrid& grid, int axis, DistanceTarget target, double limit) {
+/// `initial_values`: the volume's binary values, not yet passed along any axis (binary_line).
+void pass_along(std::vector<float>& squared, const VoxelGrid& grid, int axis, DistanceTarget target, double limit,
+                bool initial_values) {
     const Index3& d = grid.dims;
     const std::int64_t n = d[std::size_t(axis)];
     const std::int64_t stride = axis == 0 ? 1 : axis == 1 ? d[0] : d[0] * d[1];
@@ -116,6 +148,10 @@ void pass_along(std::vector<float>& squared, const VoxelGrid& grid, int axis, Di
                     in[std::size_t(l * n + p)] = squared[std::size_t(first + l * line_step + p * stride)];
             for (std::int64_t l = 0; l < lines; ++l) {
                 double* line = in.data() + l * n;
+                if (initial_values) {
+                    binary_line(line, n, w, target, limit, other);
+                    continue;
+                }
                 if (target == DistanceTarget::other_kind) {
                     two_sided_envelope(line, out.data(), other.data(), n, w, limit, site, value, boundary);
                     continue;
@@ -170,7 +206,7 @@ PaddedDistanceMap padded_distance_transform(const BinaryVolume& volume, Distance
             float* row = map.distance.data() + map.grid.linear_index(padding, j + padding, k + padding);
             for (std::int64_t i = 0; i < d[0]; ++i) row[i] = initial(mask[i] != 0);
         }
-    for (int axis = 0; axis < 3; ++axis) pass_along(map.distance, map.grid, axis, target, limit);
+    for (int axis = 0; axis < 3; ++axis) pass_along(map.distance, map.grid, axis, target, limit, axis == 0);
     const auto voxels = static_cast<std::int64_t>(map.distance.size());
 #pragma omp parallel for schedule(static)
     for (std::int64_t v = 0; v < voxels; ++v) map.distance[std::size_t(v)] = std::sqrt(std::abs(map.distance[std::size_t(v)]));
