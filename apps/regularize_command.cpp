@@ -130,6 +130,14 @@ void add_regularization_extension_options(CLI::App& command, RegularizationExten
                        "noisy) the drift of --shrink-correction is averaged over this many steps instead, so that a "
                        "tube's convex side, which drifts in further, is corrected too (docs/accuracy.md, 'Local shrink "
                        "on thin tubes'); 0 = off. Default 10");
+    command.add_option("--shrink-wide-steps", o.shrink_wide_steps,
+                       "The drift of --shrink-correction is averaged over this many steps too, and the wide average "
+                       "taken wherever the two differ by less than --shrink-wide-tolerance: it removes the staircase's "
+                       "ripple that the narrow average leaves on smooth surfaces, and keeps a drift that varies "
+                       "(docs/accuracy.md, 'A wide shrink average where the drift agrees'); 0 = off. Default 160");
+    command.add_option("--shrink-wide-tolerance", o.shrink_wide_tolerance,
+                       "Where the narrow and wide averages of the drift differ by more than this (voxels), the "
+                       "difference beyond it is kept. Default 0.01");
     command.add_option("--noise-fairness", o.noise_fairness,
                        "Noisy voxels: the fairness of a vertex where a share rho of the faces around it have an estimated "
                        "normal pointing into the object is weighted 1 + G min(1, rho/0.02)^2 (docs/accuracy.md); 0 = off. "

@@ -63,7 +63,7 @@ TEST(Pipeline, EqualsTheStagesCalledByHand) {
     SolverOptions solver;
     solver.kind = SolverKind::Cholmod;
     const RegularizationResult solved = regularize(surface, normals, weights, solver);
-    const ShrinkCorrection expected = correct_shrink(surface, solved.positions, normals, 40);
+    const ShrinkCorrection expected = correct_shrink(surface, solved.positions, normals, ShrinkAveraging{});
 
     ASSERT_EQ(result.surface.face_count(), surface.face_count());
     EXPECT_EQ((result.surface.quads - surface.quads).cwiseAbs().maxCoeff(), 0);

@@ -245,6 +245,12 @@ struct RegularizationExtensions {
     /// of the --alpha-reach reference; not where the noise fairness is raised) the drift is averaged
     /// over this many steps instead (correct_shrink's local_share); unset = 10; 0 = off.
     std::optional<int> shrink_local_steps;
+    /// --shrink-wide-steps: the wide average of the drift, taken where it agrees with the
+    /// --shrink-correction one within --shrink-wide-tolerance (ShrinkAveraging,
+    /// shrink_correction.hpp); unset = 160; at most --shrink-correction: off.
+    std::optional<int> shrink_wide_steps;
+    /// --shrink-wide-tolerance: τ of the wide average, in voxels (of the smallest spacing); unset = 0.01.
+    std::optional<double> shrink_wide_tolerance;
     /// --noise-fairness: gain G of the fairness multipliers 1 + G min(1, ρ/0.02)² where a share ρ
     /// of the faces around a vertex point against their surfel (noise_fairness_gamma,
     /// local_weights.hpp); unset = 12; 0 = off. Multiplies --gamma-map / --gamma-file.

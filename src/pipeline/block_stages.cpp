@@ -41,6 +41,8 @@ void refuse_global_options(const PipelineOptions& o, const std::string& driver) 
     refuse(e.alpha_reach_sheet.has_value(), "--alpha-reach-sheet", whole);
     refuse(e.shrink_correction && *e.shrink_correction > 0, "--shrink-correction", whole);
     refuse(e.shrink_local_steps.has_value(), "--shrink-local-steps", whole);
+    refuse(e.shrink_wide_steps.has_value(), "--shrink-wide-steps", whole);
+    refuse(e.shrink_wide_tolerance.has_value(), "--shrink-wide-tolerance", whole);
     refuse(e.noise_fairness && *e.noise_fairness > 0, "--noise-fairness", whole);
 }
 

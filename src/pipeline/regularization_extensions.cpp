@@ -197,6 +197,9 @@ void check_regularization_extensions(const RegularizationExtensions& o) {
         throw Error("--junction-turn-weight must be zero or positive");
     if (o.shrink_correction && *o.shrink_correction < 0) throw Error("--shrink-correction must be 0 (off) or positive");
     if (o.shrink_local_steps && *o.shrink_local_steps < 0) throw Error("--shrink-local-steps must be 0 (off) or positive");
+    if (o.shrink_wide_steps && *o.shrink_wide_steps < 0) throw Error("--shrink-wide-steps must be 0 (off) or positive");
+    if (o.shrink_wide_tolerance && !(*o.shrink_wide_tolerance >= 0 && std::isfinite(*o.shrink_wide_tolerance)))
+        throw Error("--shrink-wide-tolerance must be zero or positive and finite");
     if (o.shrink_correction && *o.shrink_correction > 0 && o.clamp)
         throw Error("--shrink-correction moves vertices out of the --clamp boxes: do not combine them");
     if (!(o.clamp_tolerance > 0) || !std::isfinite(o.clamp_tolerance)) throw Error("--clamp-tolerance must be positive");
@@ -277,17 +280,23 @@ RegularizationResult run_regularization(const RegularizationExtensions& o, const
                                     {"weight", o.junction_turn_weight.value_or(kDefaultJunctionTurnWeight)}};
     if (!o.clamp) {
         RegularizationResult result = regularize(surface, normals, weights, solver);
-        const int steps = o.shrink_correction.value_or(40);
-        if (steps == 0) return result;
-        const int local_steps = o.shrink_local_steps.value_or(10);
-        const Eigen::VectorXd local = local_steps > 0 ? local_shrink : Eigen::VectorXd();
-        const ShrinkCorrection correction = correct_shrink(surface, result.positions, normals, steps, local, local_steps);
+        ShrinkAveraging averaging;
+        averaging.steps = o.shrink_correction.value_or(averaging.steps);
+        if (averaging.steps == 0) return result;
+        averaging.wide_steps = o.shrink_wide_steps.value_or(averaging.wide_steps);
+        averaging.wide_tolerance = o.shrink_wide_tolerance.value_or(averaging.wide_tolerance);
+        averaging.local_steps = o.shrink_local_steps.value_or(10);
+        if (averaging.local_steps > 0) averaging.local_share = local_shrink;
+        const ShrinkCorrection correction = correct_shrink(surface, result.positions, normals, averaging);
         const EnergyTerms solved = result.energy_after;
         result.positions = correction.positions;
         result.energy_after = regularization_energy(result.positions, surface.vertices, surface.quads,
                                                     fairness_links(surface), normals, weights);
-        report["shrink_correction"] = {{"steps", steps},
-                                       {"local_steps", local_steps},
+        const Eigen::VectorXd& local = averaging.local_share;
+        report["shrink_correction"] = {{"steps", averaging.steps},
+                                       {"wide_steps", averaging.wide_steps > averaging.steps ? averaging.wide_steps : 0},
+                                       {"wide_tolerance_voxels", averaging.wide_tolerance},
+                                       {"local_steps", averaging.local_steps},
                                        {"local_faces", local.size() > 0 ? (local.array() > 0).count() : 0},
                                        {"mean_shift", correction.mean_shift},
                                        {"max_shift", correction.max_shift},

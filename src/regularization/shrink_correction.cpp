@@ -3,6 +3,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
 #include <string>
 
 #include "dsreg/error.hpp"
@@ -76,28 +77,47 @@ Eigen::VectorXd average_over_faces(const DigitalSurface& surface, Eigen::VectorX
     return values;
 }
 
+/// The drift per face: the narrow average of the offsets, soft-thresholded towards the wide one
+/// (shrink_correction.hpp), blended towards the local one by the local share.
+Eigen::VectorXd averaged_drift(const DigitalSurface& surface, const Eigen::VectorXd& offsets, const ShrinkAveraging& a) {
+    Eigen::VectorXd drift = average_over_faces(surface, offsets, a.steps);
+    if (a.wide_steps > a.steps) {
+        const Eigen::VectorXd wide = average_over_faces(surface, drift, a.wide_steps - a.steps);  // the same filter, longer
+        const double tolerance = a.wide_tolerance * surface.grid.spacing.minCoeff();
+#pragma omp parallel for schedule(static)
+        for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+            const double difference = drift[f] - wide[f];
+            drift[f] = wide[f] + std::copysign(std::max(0.0, std::abs(difference) - tolerance), difference);
+        }
+    }
+    if (a.local_share.size() > 0 && (a.local_share.array() > 0).any()) {
+        const Eigen::VectorXd local = average_over_faces(surface, offsets, a.local_steps);
+        drift += a.local_share.cwiseMax(0.0).cwiseMin(1.0).cwiseProduct(local - drift);
+    }
+    return drift;
+}
+
 }  // namespace
 
 ShrinkCorrection correct_shrink(const DigitalSurface& surface, const PointMatrix& positions, const PointMatrix& normals,
-                                int steps, const Eigen::VectorXd& local_share, int local_steps) {
+                                const ShrinkAveraging& averaging) {
     if (positions.rows() != surface.vertex_count() || normals.rows() != surface.face_count())
         throw Error("correct_shrink: " + std::to_string(positions.rows()) + " positions and " +
                     std::to_string(normals.rows()) + " normals for a surface of " +
                     std::to_string(surface.vertex_count()) + " vertices and " + std::to_string(surface.face_count()) +
                     " faces");
-    if (steps < 0 || local_steps < 0) throw Error("correct_shrink: the number of averaging steps must not be negative");
-    if (local_share.size() != 0 && local_share.size() != surface.face_count())
-        throw Error("correct_shrink: " + std::to_string(local_share.size()) + " local shares for " +
+    const ShrinkAveraging& a = averaging;
+    if (a.steps < 0 || a.wide_steps < 0 || a.local_steps < 0)
+        throw Error("correct_shrink: the number of averaging steps must not be negative");
+    if (!(a.wide_tolerance >= 0) || !std::isfinite(a.wide_tolerance))
+        throw Error("correct_shrink: the wide average's tolerance must be zero or positive and finite");
+    if (a.local_share.size() != 0 && a.local_share.size() != surface.face_count())
+        throw Error("correct_shrink: " + std::to_string(a.local_share.size()) + " local shares for " +
                     std::to_string(surface.face_count()) + " faces");
     ShrinkCorrection result;
     result.positions = positions;
-    if (steps == 0) return result;
-    const Eigen::VectorXd offsets = face_offsets(surface, positions, normals);
-    Eigen::VectorXd drift = average_over_faces(surface, offsets, steps);
-    if (local_share.size() > 0 && (local_share.array() > 0).any()) {
-        const Eigen::VectorXd local = average_over_faces(surface, offsets, local_steps);
-        drift += local_share.cwiseMax(0.0).cwiseMin(1.0).cwiseProduct(local - drift);
-    }
+    if (a.steps == 0) return result;
+    const Eigen::VectorXd drift = averaged_drift(surface, face_offsets(surface, positions, normals), a);
     const std::int64_t n = surface.vertex_count();
     PointMatrix vertex_normal = PointMatrix::Zero(n, 3);
     Eigen::VectorXd vertex_drift = Eigen::VectorXd::Zero(n), faces = Eigen::VectorXd::Zero(n);
