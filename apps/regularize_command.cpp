@@ -63,6 +63,11 @@ void add_normal_field_options(CLI::App& cmd, NormalFieldOptions& o, PipelineOutp
                    "Largest radius of the adaptive integral invariants (the default field), physical units: each "
                    "surfel's radius follows the local reach of the object and of the background, from 2 voxels up to "
                    "this; extrapolated from 6 voxels up (docs/accuracy.md). Default 14 voxels");
+    cmd.add_option("--ii-extrapolation-threshold", o.extrapolation_threshold_deg,
+                   "The adaptive field's Richardson correction 2 (n(r/sqrt(2)) - n(r)) is shrunk by this many degrees "
+                   "(soft threshold: a correction at the level of the digitization noise is no evidence of bias; "
+                   "docs/accuracy.md, 'The extrapolation's threshold'). Default 0.75")
+        ->check(CLI::NonNegativeNumber);
     cmd.add_option("--ii-kernel", o.ii_kernel,
                    "Weights of the integral-invariant ball: biweight (1 - d^2/r^2)^2, smooth, more accurate "
                    "(docs/accuracy.md), or ball (uniform, the paper's integral invariants)")

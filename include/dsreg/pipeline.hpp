@@ -153,6 +153,9 @@ struct NormalFieldOptions {
     std::optional<std::string> at_input;  ///< --at-input: the field g that AT regularizes (default ii)
     std::optional<double> radius;         ///< --radius (physical units): a fixed radius; unset = adaptive
     std::optional<double> max_radius;     ///< --ii-max-radius (physical units) of the adaptive field
+    /// --ii-extrapolation-threshold (degrees): the adaptive field's Richardson correction is shrunk
+    /// by this (AdaptiveNormalOptions::extrapolation_threshold_deg); unset = that default, 0.75°.
+    std::optional<double> extrapolation_threshold_deg;
     std::string ii_kernel = "biweight";   ///< --ii-kernel: ball or biweight
     bool ii_extrapolate = false;          ///< --ii-extrapolate: 2·n(r/√2) − n(r)
     std::string file;                     ///< --normals-file: g (with --normals at) or the field itself

@@ -152,6 +152,7 @@ AdaptiveNormalOptions default_adaptive_options(const NormalFieldOptions& o, cons
     adaptive.smoothing_steps = 4;       // on thin parts, whose small balls are noisy
     adaptive.smoothing_below = 5.0 * voxel;
     adaptive.kernel = parse_integral_invariant_kernel(o.ii_kernel);
+    adaptive.extrapolation_threshold_deg = o.extrapolation_threshold_deg.value_or(adaptive.extrapolation_threshold_deg);
     return adaptive;
 }
 
@@ -199,6 +200,12 @@ void check_normal_field_options(const NormalFieldOptions& o, bool input_is_shape
         throw Error("--ii-max-radius must be positive");
     if (o.max_radius && (o.radius || o.ii_extrapolate || input_kind(o) != "ii"))
         throw Error("--ii-max-radius applies to the adaptive integral invariants only (not with --radius, "
+                    "--ii-extrapolate or another field)");
+    const std::optional<double>& threshold = o.extrapolation_threshold_deg;
+    if (threshold && (!(*threshold >= 0) || !std::isfinite(*threshold)))
+        throw Error("--ii-extrapolation-threshold must be zero or positive (degrees)");
+    if (threshold && (o.radius || o.ii_extrapolate || input_kind(o) != "ii"))
+        throw Error("--ii-extrapolation-threshold applies to the adaptive integral invariants only (not with --radius, "
                     "--ii-extrapolate or another field)");
     if (field_kind(o) == "at") {
         validate_at_parameters(o.at);
