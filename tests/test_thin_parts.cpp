@@ -337,53 +337,25 @@ TEST(ShrinkCorrection, UndoesAUniformShrinkOfABall) {
     EXPECT_THROW(correct_shrink(surface, shrunk, radial, bad), Error);
 }
 
-TEST(ShrinkCorrection, LocalShareUndoesALocalShrinkThatTheWideAverageSpreads) {
-    // The same ball, its cap z > 17 (the upper 5 voxels) moved inward by 0.6 voxel, the rest not:
-    // corrected, it should land where the unmoved surface does once corrected. The 40-step average spreads the cap's drift over the sphere;
-    // the 10-step one, given everywhere as the local share, keeps it where it is.
-    const BinaryVolume volume = test::make_ball(25, 10.0, 12.0);
-    const DigitalSurface surface = extract_digital_surface(volume, Connectivity::TwentySix);
-    const Eigen::RowVector3d centre(12, 12, 12);
-    PointMatrix moved = surface.vertices;
-    for (Eigen::Index v = 0; v < moved.rows(); ++v)
-        if (moved(v, 2) > 17) moved.row(v) -= 0.6 * (moved.row(v) - centre).normalized();
-    const PointMatrix centres = surfel_centers(surface);
-    PointMatrix radial(surface.face_count(), 3);
-    for (Eigen::Index f = 0; f < radial.rows(); ++f) radial.row(f) = (centres.row(f) - centre).normalized();
-    const auto rms_error = [&](const Eigen::VectorXd& local_share, int local_steps) {
-        const ShrinkAveraging averaging = narrow_average(40, local_share, local_steps);
-        const PointMatrix a = correct_shrink(surface, moved, radial, averaging).positions;
-        const PointMatrix b = correct_shrink(surface, surface.vertices, radial, averaging).positions;
-        double sum = 0;  // the moved surface corrected should land where the unmoved one does
-        for (Eigen::Index v = 0; v < a.rows(); ++v) {
-            const double error = (a.row(v) - centre).norm() - (b.row(v) - centre).norm();
-            sum += error * error;
-        }
-        return std::sqrt(sum / double(a.rows()));
-    };
-    const Eigen::VectorXd everywhere = Eigen::VectorXd::Ones(surface.face_count());
-    const double wide = rms_error({}, 0), local = rms_error(everywhere, 10);
-    EXPECT_LT(local, 0.8 * wide) << local << " against " << wide;  // 0.077 against 0.108 voxel
-    EXPECT_DOUBLE_EQ(rms_error(Eigen::VectorXd::Zero(surface.face_count()), 10), wide);  // a zero share: the wide average
-    EXPECT_THROW(correct_shrink(surface, moved, radial, narrow_average(40, Eigen::VectorXd::Ones(3), 10)), Error);
-    EXPECT_THROW(correct_shrink(surface, moved, radial, narrow_average(40, everywhere, -1)), Error);
-}
+/// The digital surface of a ball of radius 10 voxels with its cap z > 17 (the upper 5 voxels)
+/// moved inward by 0.6 voxel and the rest not, and the radial field.
+struct CappedBall {
+    DigitalSurface surface;
+    Eigen::RowVector3d centre{12, 12, 12};
+    PointMatrix moved, radial;
 
-TEST(ShrinkCorrection, TheWideAverageKeepsADriftThatVaries) {
-    // The cap of the ball above moved in by 0.6 voxel: its drift differs from the rest's by far
-    // more than τ, so the narrow average is kept there, and the corrected surface lands where the
-    // unmoved one does as well as with the narrow average alone; the wide average taken
-    // everywhere (τ larger than any difference) spreads the cap's drift over the ball.
-    const BinaryVolume volume = test::make_ball(25, 10.0, 12.0);
-    const DigitalSurface surface = extract_digital_surface(volume, Connectivity::TwentySix);
-    const Eigen::RowVector3d centre(12, 12, 12);
-    PointMatrix moved = surface.vertices;
-    for (Eigen::Index v = 0; v < moved.rows(); ++v)
-        if (moved(v, 2) > 17) moved.row(v) -= 0.6 * (moved.row(v) - centre).normalized();
-    const PointMatrix centres = surfel_centers(surface);
-    PointMatrix radial(surface.face_count(), 3);
-    for (Eigen::Index f = 0; f < radial.rows(); ++f) radial.row(f) = (centres.row(f) - centre).normalized();
-    const auto rms_error = [&](const ShrinkAveraging& averaging) {
+    CappedBall() : surface(extract_digital_surface(test::make_ball(25, 10.0, 12.0), Connectivity::TwentySix)) {
+        moved = surface.vertices;
+        for (Eigen::Index v = 0; v < moved.rows(); ++v)
+            if (moved(v, 2) > 17) moved.row(v) -= 0.6 * (moved.row(v) - centre).normalized();
+        const PointMatrix centres = surfel_centers(surface);
+        radial.resize(surface.face_count(), 3);
+        for (Eigen::Index f = 0; f < radial.rows(); ++f) radial.row(f) = (centres.row(f) - centre).normalized();
+    }
+
+    /// Corrected, the moved surface should land where the unmoved one does once corrected: the
+    /// rms of the difference of their radii.
+    double rms_error(const ShrinkAveraging& averaging) const {
         const PointMatrix a = correct_shrink(surface, moved, radial, averaging).positions;
         const PointMatrix b = correct_shrink(surface, surface.vertices, radial, averaging).positions;
         double sum = 0;
@@ -392,11 +364,32 @@ TEST(ShrinkCorrection, TheWideAverageKeepsADriftThatVaries) {
             sum += error * error;
         }
         return std::sqrt(sum / double(a.rows()));
-    };
+    }
+};
+
+TEST(ShrinkCorrection, LocalShareUndoesALocalShrinkThatTheWideAverageSpreads) {
+    // The 40-step average spreads the cap's drift over the sphere; the 10-step one, given
+    // everywhere as the local share, keeps it where it is.
+    const CappedBall ball;
+    const std::int64_t faces = ball.surface.face_count();
+    const Eigen::VectorXd everywhere = Eigen::VectorXd::Ones(faces);
+    const double wide = ball.rms_error(narrow_average(40)), local = ball.rms_error(narrow_average(40, everywhere, 10));
+    EXPECT_LT(local, 0.8 * wide) << local << " against " << wide;  // 0.077 against 0.108 voxel
+    EXPECT_DOUBLE_EQ(ball.rms_error(narrow_average(40, Eigen::VectorXd::Zero(faces), 10)), wide);  // a zero share: the wide average
+    EXPECT_THROW(correct_shrink(ball.surface, ball.moved, ball.radial, narrow_average(40, Eigen::VectorXd::Ones(3), 10)), Error);
+    EXPECT_THROW(correct_shrink(ball.surface, ball.moved, ball.radial, narrow_average(40, everywhere, -1)), Error);
+}
+
+TEST(ShrinkCorrection, TheWideAverageKeepsADriftThatVaries) {
+    // The cap's drift differs from the rest's by far more than τ, so the narrow average is kept
+    // there, and the corrected surface lands where the unmoved one does as well as with the
+    // narrow average alone; the wide average taken everywhere (τ larger than any difference)
+    // spreads the cap's drift over the ball.
+    const CappedBall ball;
     ShrinkAveraging everywhere;
     everywhere.wide_tolerance = 10;
-    const double narrow = rms_error(narrow_average(40)), thresholded = rms_error(ShrinkAveraging{}),
-                 wide = rms_error(everywhere);
+    const double narrow = ball.rms_error(narrow_average(40)), thresholded = ball.rms_error(ShrinkAveraging{}),
+                 wide = ball.rms_error(everywhere);
     EXPECT_LT(thresholded, 1.1 * narrow) << thresholded << " against " << narrow;
     EXPECT_GT(wide, 1.3 * narrow) << wide << " against " << narrow;
 }
