@@ -176,7 +176,13 @@ AdaptiveNormalField adaptive_integral_invariant_normals(const VoxelLabels& volum
     field.reach.inner = max_over_rings(surface, raw.inner, o.reach_rings);
     field.reach.outer = max_over_rings(surface, raw.outer, o.reach_rings);
     const std::vector<int> level = radius_levels(volume, surface, maps, raw, field.reach, levels, o);
-    field.normals = normals_at_levels(volume, rows, surface, levels, level, o.kernel);
+    // Faces at the pilot's level have their normal already (the same ball, the same sums).
+    std::vector<int> to_compute = level;
+    for (int& l : to_compute)
+        if (l == pilot_level) l = -1;
+    field.normals = normals_at_levels(volume, rows, surface, levels, to_compute, o.kernel);
+    for (std::int64_t f = 0; f < m; ++f)
+        if (level[std::size_t(f)] == pilot_level) field.normals.row(f) = pilot.row(f);
     field.radius.resize(m);
     for (std::int64_t f = 0; f < m; ++f) field.radius[f] = levels.radius(level[std::size_t(f)]);
     field.extrapolated = Eigen::VectorXd::Zero(m);
