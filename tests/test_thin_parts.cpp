@@ -394,18 +394,12 @@ TEST(ShrinkCorrection, TheWideAverageKeepsADriftThatVaries) {
     EXPECT_GT(wide, 1.3 * narrow) << wide << " against " << narrow;
 }
 
-/// Mean distance of the vertices to the sphere of radius r about the origin, and mean angle (°)
-/// between each quad's normal (the cross product of its diagonals) and the sphere's at its centroid.
-std::pair<double, double> sphere_errors(const PolygonMesh& mesh, double r) {
-    double distance = 0, angle = 0;
-    for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v) distance += std::abs(mesh.vertices.row(v).norm() - r);
-    for (Eigen::Index f = 0; f < mesh.faces.rows(); ++f) {
-        const auto p = [&](int k) { return Eigen::Vector3d(mesh.vertices.row(mesh.faces(f, k)).transpose()); };
-        const Eigen::Vector3d n = (p(2) - p(0)).cross(p(3) - p(1)).normalized();
-        const Eigen::Vector3d truth = (p(0) + p(1) + p(2) + p(3)).normalized();
-        angle += std::acos(std::clamp(n.dot(truth), -1.0, 1.0)) * 180.0 / M_PI;
-    }
-    return {distance / double(mesh.vertices.rows()), angle / double(mesh.faces.rows())};
+/// The sphere of radius 9 at h = 0.25 (36 voxels).
+constexpr const char* kSphere9 = "x^2+y^2+z^2-81";
+
+/// A pipeline run's mesh of kSphere9 against the sphere.
+MeshEvaluation sphere_evaluation(const PipelineResult& result) {
+    return evaluate_mesh(solved_mesh(result), make_shape(kSphere9, 10), MeshEvaluationOptions{});
 }
 
 TEST(ShrinkCorrection, TheWideAverageTakesTheStaircaseRippleOffASphere) {
@@ -413,12 +407,13 @@ TEST(ShrinkCorrection, TheWideAverageTakesTheStaircaseRippleOffASphere) {
     // narrow average leaves tilts the faces; the wide average removes it (suite: 0.47° → 0.38°,
     // docs/accuracy.md, "A wide shrink average where the drift agrees") and the surface stays as
     // close to the sphere.
-    const VolumeSource source = shape_at_quarter_step("x^2+y^2+z^2-81", 10);
+    const VolumeSource source = shape_at_quarter_step(kSphere9, 10);
     PipelineOptions narrow;
     narrow.extensions.shrink_wide_steps = 0;
-    const auto [narrow_distance, narrow_angle] = sphere_errors(solved_mesh(run_pipeline(source, narrow)), 9.0);
     const PipelineResult defaults = run_pipeline(source, PipelineOptions{});
-    const auto [distance, angle] = sphere_errors(solved_mesh(defaults), 9.0);
+    const MeshEvaluation without = sphere_evaluation(run_pipeline(source, narrow)), with = sphere_evaluation(defaults);
+    const double angle = with.normal_angle_deg.mean, narrow_angle = without.normal_angle_deg.mean;
+    const double distance = with.vertex_distance.mean, narrow_distance = without.vertex_distance.mean;
     EXPECT_LT(angle, 0.9 * narrow_angle) << angle << " against " << narrow_angle;
     EXPECT_LT(distance, 1.02 * narrow_distance) << distance << " against " << narrow_distance;
     EXPECT_EQ(defaults.extension_report["shrink_correction"].value("wide_steps", 0), 160);
@@ -429,11 +424,13 @@ TEST(AdaptiveNormals, TheExtrapolationsThresholdKeepsItsNoiseOffASphere) {
     // symmetric about the normal): 2·(n(r/√2) − n(r)) is noise, of which a threshold of 0.5° let
     // through more than the default 0.75° (0.36° against 0.38° here, as in the suite;
     // docs/accuracy.md, "The extrapolation's threshold").
-    const VolumeSource source = shape_at_quarter_step("x^2+y^2+z^2-81", 10);
+    const VolumeSource source = shape_at_quarter_step(kSphere9, 10);
     PipelineOptions half_degree;
     half_degree.normals.extrapolation_threshold_deg = 0.5;
-    const auto [loose_distance, loose_angle] = sphere_errors(solved_mesh(run_pipeline(source, half_degree)), 9.0);
-    const auto [distance, angle] = sphere_errors(solved_mesh(run_pipeline(source, PipelineOptions{})), 9.0);
+    const MeshEvaluation loose = sphere_evaluation(run_pipeline(source, half_degree)),
+                         defaults = sphere_evaluation(run_pipeline(source, PipelineOptions{}));
+    const double angle = defaults.normal_angle_deg.mean, loose_angle = loose.normal_angle_deg.mean;
+    const double distance = defaults.vertex_distance.mean, loose_distance = loose.vertex_distance.mean;
     EXPECT_LT(angle, 0.97 * loose_angle) << angle << " against " << loose_angle;
     EXPECT_LT(distance, 1.02 * loose_distance) << distance << " against " << loose_distance;
     PipelineOptions fixed;
