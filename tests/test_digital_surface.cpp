@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <map>
 #include <random>
 
@@ -210,6 +211,28 @@ TEST(DigitalSurface, LinksFollowQuadEdges) {
         for (std::int64_t q = links.offsets[std::size_t(i)]; q < links.offsets[std::size_t(i + 1)]; ++q)
             EXPECT_DOUBLE_EQ((s.vertices.row(i) - s.vertices.row(links.neighbors[std::size_t(q)])).norm(), 1.0);
     }
+}
+
+TEST(DigitalSurface, CornersListEachFaceAtEachOfItsVerticesOnce) {
+    // Two voxels touching along an edge (26-connectivity: split pointels), so that vertices have
+    // three to six faces.
+    const auto s = extract_digital_surface(test::make_voxels({4, 4, 4}, {{1, 1, 1}, {2, 2, 1}, {1, 2, 2}}), Connectivity::TwentySix);
+    const VertexCorners corners = vertex_corners(s.quads, s.vertex_count());
+    ASSERT_EQ(corners.offsets.size(), std::size_t(s.vertex_count() + 1));
+    EXPECT_EQ(corners.codes.size(), std::size_t(4 * s.face_count()));
+    std::vector<int> seen(std::size_t(4 * s.face_count()), 0);
+    for (std::int64_t v = 0; v < s.vertex_count(); ++v) {
+        std::vector<std::int32_t> faces;
+        corners.for_each_face(v, [&](std::int32_t f) { faces.push_back(f); });
+        EXPECT_TRUE(std::is_sorted(faces.begin(), faces.end()));
+        EXPECT_GE(faces.size(), 3u);
+        for (std::int64_t q = corners.offsets[std::size_t(v)]; q < corners.offsets[std::size_t(v + 1)]; ++q) {
+            const std::int32_t code = corners.codes[std::size_t(q)];
+            EXPECT_EQ(s.quads(code / 4, code % 4), v);  // v is that corner of that face
+            ++seen[std::size_t(code)];
+        }
+    }
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), std::ptrdiff_t(seen.size()));  // every corner once
 }
 
 }  // namespace

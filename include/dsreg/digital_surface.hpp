@@ -122,4 +122,23 @@ struct VertexLinks {
 /// Links of a closed oriented polygon mesh (each directed face edge a→b adds b to link(a)).
 VertexLinks vertex_links(const FaceMatrix& faces, std::int64_t vertex_count);
 
+/// The corners of a face array at each vertex in compressed form: vertex i is corner e of face f
+/// for each code f·k + e in codes[offsets[i] .. offsets[i+1]) (k = face_size), in increasing f.
+/// About 24 bytes per quad, against 60 for a vector of faces per vertex.
+struct VertexCorners {
+    std::vector<std::int64_t> offsets;
+    std::vector<std::int32_t> codes;
+    std::int32_t face_size = 0;
+
+    /// Calls visit(f) for each face with a corner at vertex i, in increasing order.
+    template <class Visit>
+    void for_each_face(std::int64_t i, Visit visit) const {
+        for (std::int64_t q = offsets[std::size_t(i)]; q < offsets[std::size_t(i) + 1]; ++q) visit(codes[std::size_t(q)] / face_size);
+    }
+};
+
+/// The corners of `faces` at each of the vertex_count vertices. Throws dsreg::Error if the codes
+/// f·k + e do not fit in 32 bits.
+VertexCorners vertex_corners(const FaceMatrix& faces, std::int64_t vertex_count);
+
 }  // namespace dsreg

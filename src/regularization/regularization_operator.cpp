@@ -43,20 +43,8 @@ double alignment_weight(const RegularizationWeights& w, std::int64_t f) {
 
 RegularizationOperator::RegularizationOperator(const FaceMatrix& quads, const VertexLinks& links, const PointMatrix& normals,
                                                const RegularizationWeights& w, std::int64_t n)
-    : quads_(quads), links_(links), normals_(normals), w_(w), n_(n), k_(quads.cols()), in_(incoming_links(links, n)) {
+    : quads_(quads), links_(links), normals_(normals), w_(w), n_(n), k_(quads.cols()), in_(incoming_links(links, n)), corners_(vertex_corners(quads, n)) {
     const std::int64_t m = quads.rows();
-    if (m * k_ > std::int64_t(INT32_MAX)) throw Error("regularization: too many faces (" + std::to_string(m) + ")");
-    // Vertex → (face, corner) incidences, in increasing face order for each vertex.
-    incidence_start_.assign(std::size_t(n + 1), 0);
-    for (std::int64_t f = 0; f < m; ++f)
-        for (std::int64_t e = 0; e < k_; ++e) ++incidence_start_[std::size_t(quads(f, e)) + 1];
-    for (std::int64_t i = 0; i < n; ++i) incidence_start_[std::size_t(i + 1)] += incidence_start_[std::size_t(i)];
-    incidence_.resize(std::size_t(incidence_start_.back()));
-    {
-        std::vector<std::int64_t> next(incidence_start_.begin(), incidence_start_.end() - 1);
-        for (std::int64_t f = 0; f < m; ++f)
-            for (std::int64_t e = 0; e < k_; ++e) incidence_[std::size_t(next[std::size_t(quads(f, e))]++)] = std::int32_t(f * k_ + e);
-    }
     face_weight_.resize(std::size_t(m));
     for (std::int64_t f = 0; f < m; ++f) face_weight_[std::size_t(f)] = w.beta * alignment_weight(w, f);
     fair_weight_.assign(std::size_t(n), 0.0);
@@ -108,8 +96,8 @@ void RegularizationOperator::row(std::int64_t j, Row& s, bool values) const {
     for (std::int64_t q = in_.offsets[std::size_t(j)]; q < in_.offsets[std::size_t(j + 1)]; ++q) touch(in_.neighbors[std::size_t(q)]);
     // The face neighbours of j are in its links on a manifold, not always on a label complex
     // (a junction vertex is linked along its junction curve only, a junction point not at all).
-    for (std::int64_t q = incidence_start_[std::size_t(j)]; q < incidence_start_[std::size_t(j + 1)]; ++q) {
-        const std::int64_t f = incidence_[std::size_t(q)] / k_, e = incidence_[std::size_t(q)] % k_;
+    for (std::int64_t q = corners_.offsets[std::size_t(j)]; q < corners_.offsets[std::size_t(j + 1)]; ++q) {
+        const std::int64_t f = corners_.codes[std::size_t(q)] / k_, e = corners_.codes[std::size_t(q)] % k_;
         touch(quads_(f, (e + 1) % k_));
         touch(quads_(f, (e + k_ - 1) % k_));
     }
@@ -126,8 +114,8 @@ void RegularizationOperator::row(std::int64_t j, Row& s, bool values) const {
         s.scalar.assign(s.columns.size(), 0.0);
         s.blocks.assign(s.columns.size(), Eigen::Matrix3d::Zero());
     }
-    for (std::int64_t q = incidence_start_[std::size_t(j)]; q < incidence_start_[std::size_t(j + 1)]; ++q) {
-        const std::int64_t f = incidence_[std::size_t(q)] / k_, e = incidence_[std::size_t(q)] % k_;
+    for (std::int64_t q = corners_.offsets[std::size_t(j)]; q < corners_.offsets[std::size_t(j + 1)]; ++q) {
+        const std::int64_t f = corners_.codes[std::size_t(q)] / k_, e = corners_.codes[std::size_t(q)] % k_;
         const double weight = face_weight_[std::size_t(f)];
         if (weight == 0) continue;
         const std::size_t next = slot(quads_(f, (e + 1) % k_)), previous = slot(quads_(f, (e + k_ - 1) % k_)), self = slot(j);
@@ -221,8 +209,8 @@ void RegularizationOperator::multiply(const Eigen::VectorXd& x, Eigen::VectorXd&
             for (std::int64_t q = in_.offsets[std::size_t(j)]; q < in_.offsets[std::size_t(j + 1)]; ++q)
                 sum -= scaled_residual_.segment<3>(3 * std::int64_t(in_.neighbors[std::size_t(q)]));
         }
-        for (std::int64_t q = incidence_start_[std::size_t(j)]; q < incidence_start_[std::size_t(j + 1)]; ++q) {
-            const std::int64_t f = incidence_[std::size_t(q)] / k_, e = incidence_[std::size_t(q)] % k_;
+        for (std::int64_t q = corners_.offsets[std::size_t(j)]; q < corners_.offsets[std::size_t(j + 1)]; ++q) {
+            const std::int64_t f = corners_.codes[std::size_t(q)] / k_, e = corners_.codes[std::size_t(q)] % k_;
             const double c = face_weight_[std::size_t(f)];
             if (c == 0) continue;
             const Eigen::Vector3d u = normals_.row(f).transpose();

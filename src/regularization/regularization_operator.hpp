@@ -43,6 +43,8 @@ public:
 
     std::int64_t vertex_count() const { return n_; }
     std::int64_t unknowns() const { return 3 * n_; }
+    /// The faces' corners at each vertex (vertex_corners of the quads).
+    const VertexCorners& corners() const { return corners_; }
 
     /// y = R x (parallel over vertices; y is resized). Equal to the assembled matrix's product up
     /// to rounding (the terms are summed in another order).
@@ -80,8 +82,7 @@ private:
     const RegularizationWeights& w_;
     std::int64_t n_, k_;
     VertexLinks in_;                              ///< in(j) = {i : j ∈ link(i)}, with multiplicity
-    std::vector<std::int64_t> incidence_start_;   ///< vertex → its (face, corner) pairs ...
-    std::vector<std::int32_t> incidence_;         ///< ... as f·k + corner, increasing f
+    VertexCorners corners_;                       ///< vertex → its (face, corner) pairs, increasing face
     std::vector<double> face_weight_;             ///< β β_f w2_f
     std::vector<double> fair_weight_;             ///< γ γ_i w0_i (0 where the link is empty)
     std::vector<double> data_weight_;             ///< α α_i w0_i

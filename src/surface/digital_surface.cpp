@@ -1,6 +1,7 @@
 #include "dsreg/digital_surface.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
 #include <string>
 #include <tuple>
@@ -477,6 +478,24 @@ VertexLinks vertex_links(const FaceMatrix& faces, std::int64_t vertex_count) {
         for (std::int64_t e = 0; e < k; ++e)
             links.neighbors[static_cast<std::size_t>(cursor[static_cast<std::size_t>(faces(f, e))]++)] = faces(f, (e + 1) % k);
     return links;
+}
+
+VertexCorners vertex_corners(const FaceMatrix& faces, std::int64_t vertex_count) {
+    const std::int64_t k = faces.cols();
+    if (faces.rows() * k > std::int64_t(std::numeric_limits<std::int32_t>::max()))
+        throw Error("too many faces for 32-bit corner codes (" + std::to_string(faces.rows()) + ")");
+    VertexCorners corners;
+    corners.face_size = std::int32_t(k);
+    corners.offsets.assign(static_cast<std::size_t>(vertex_count + 1), 0);
+    for (std::int64_t f = 0; f < faces.rows(); ++f)
+        for (std::int64_t e = 0; e < k; ++e) ++corners.offsets[static_cast<std::size_t>(faces(f, e) + 1)];
+    std::partial_sum(corners.offsets.begin(), corners.offsets.end(), corners.offsets.begin());
+    corners.codes.resize(static_cast<std::size_t>(corners.offsets.back()));
+    std::vector<std::int64_t> cursor(corners.offsets.begin(), corners.offsets.end() - 1);
+    for (std::int64_t f = 0; f < faces.rows(); ++f)
+        for (std::int64_t e = 0; e < k; ++e)
+            corners.codes[static_cast<std::size_t>(cursor[static_cast<std::size_t>(faces(f, e))]++)] = std::int32_t(f * k + e);
+    return corners;
 }
 
 }  // namespace dsreg

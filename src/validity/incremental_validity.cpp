@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <unordered_map>
 
 #include "triangle_predicates.hpp"
@@ -18,7 +19,6 @@ using Clock = std::chrono::steady_clock;
 
 struct Box {
     Eigen::Array3d low, high;
-    bool overlaps(const Box& o) const { return (low <= o.high).all() && (o.low <= high).all(); }
 };
 
 Box triangle_box(const PointMatrix& vertices, const FaceMatrix& triangles, Eigen::Index t) {
@@ -37,43 +37,61 @@ void sort_unique(std::vector<std::int64_t>& values) {
 
 }  // namespace
 
+/// A box in single precision, rounded outwards: it contains the box it was made from, so the
+/// candidate pairs it gives are a superset of the exact boxes' (the pairs are decided by the
+/// exact predicate) in half the memory.
+struct CoarseBox {
+    Eigen::Array3f low, high;
+
+    explicit CoarseBox(const Box& box) {
+        for (int a = 0; a < 3; ++a) {
+            low[a] = float(box.low[a]);
+            if (double(low[a]) > box.low[a]) low[a] = std::nextafter(low[a], -std::numeric_limits<float>::infinity());
+            high[a] = float(box.high[a]);
+            if (double(high[a]) < box.high[a]) high[a] = std::nextafter(high[a], std::numeric_limits<float>::infinity());
+        }
+    }
+    bool overlaps(const CoarseBox& o) const { return (low <= o.high).all() && (o.low <= high).all(); }
+};
+
 /// Triangles bucketed by the cubic cells their bounding boxes overlap, kept up to date as they
 /// move: building it costs a hash-map entry per triangle and cell, so it is built once, with
 /// cells of twice the mean box extent of the mesh as checked first, and only the triangles that
 /// moved change cells afterwards.
 class IncrementalValidity::BoxGrid {
 public:
-    BoxGrid(const PointMatrix& vertices, const FaceMatrix& triangles) : boxes_(std::size_t(triangles.rows())) {
+    BoxGrid(const PointMatrix& vertices, const FaceMatrix& triangles) {
+        boxes_.reserve(std::size_t(triangles.rows()));
         double extent = 0;
         for (Eigen::Index t = 0; t < triangles.rows(); ++t) {
-            boxes_[std::size_t(t)] = triangle_box(vertices, triangles, t);
-            extent += (boxes_[std::size_t(t)].high - boxes_[std::size_t(t)].low).maxCoeff();
+            boxes_.emplace_back(triangle_box(vertices, triangles, t));
+            extent += (boxes_.back().high - boxes_.back().low).maxCoeff();
         }
         cell_ = std::max(2 * extent / double(std::max<Eigen::Index>(triangles.rows(), 1)), 1e-12);
-        for (std::size_t t = 0; t < boxes_.size(); ++t) for_cells(boxes_[t], [&](std::int64_t key) { cells_[key].push_back(std::int64_t(t)); });
+        for (std::size_t t = 0; t < boxes_.size(); ++t) for_cells(boxes_[t], [&](std::int64_t key) { cells_[key].push_back(std::int32_t(t)); });
     }
 
     /// Triangle t now has its corners at `vertices`.
     void move(const PointMatrix& vertices, const FaceMatrix& triangles, std::int64_t t) {
         for_cells(boxes_[std::size_t(t)], [&](std::int64_t key) {
-            std::vector<std::int64_t>& cell = cells_[key];
-            const auto it = std::find(cell.begin(), cell.end(), t);
+            std::vector<std::int32_t>& cell = cells_[key];
+            const auto it = std::find(cell.begin(), cell.end(), std::int32_t(t));
             *it = cell.back();
             cell.pop_back();
         });
-        boxes_[std::size_t(t)] = triangle_box(vertices, triangles, t);
-        for_cells(boxes_[std::size_t(t)], [&](std::int64_t key) { cells_[key].push_back(t); });
+        boxes_[std::size_t(t)] = CoarseBox(triangle_box(vertices, triangles, t));
+        for_cells(boxes_[std::size_t(t)], [&](std::int64_t key) { cells_[key].push_back(std::int32_t(t)); });
     }
 
     /// Appends the triangles other than t whose boxes meet the box of triangle t, each once
     /// (sorted). Safe to call from several threads.
     void overlapping(std::int64_t t, std::vector<std::int64_t>& out) const {
         const std::size_t first = out.size();
-        const Box& box = boxes_[std::size_t(t)];
+        const CoarseBox& box = boxes_[std::size_t(t)];
         for_cells(box, [&](std::int64_t key) {
             const auto it = cells_.find(key);
             if (it == cells_.end()) return;
-            for (const std::int64_t other : it->second)
+            for (const std::int32_t other : it->second)
                 if (other != t && boxes_[std::size_t(other)].overlaps(box)) out.push_back(other);
         });
         std::sort(out.begin() + std::ptrdiff_t(first), out.end());
@@ -82,24 +100,24 @@ public:
 
 private:
     template <class Visit>
-    void for_cells(const Box& box, Visit visit) const {
-        const Eigen::Array3i low = (box.low / cell_).floor().cast<int>(), high = (box.high / cell_).floor().cast<int>();
+    void for_cells(const CoarseBox& box, Visit visit) const {
+        const Eigen::Array3i low = (box.low.cast<double>() / cell_).floor().cast<int>(),
+                             high = (box.high.cast<double>() / cell_).floor().cast<int>();
         for (int z = low.z(); z <= high.z(); ++z)
             for (int y = low.y(); y <= high.y(); ++y)
                 for (int x = low.x(); x <= high.x(); ++x)
                     visit((std::int64_t(x) & 0x1fffff) | ((std::int64_t(y) & 0x1fffff) << 21) | ((std::int64_t(z) & 0x1fffff) << 42));
     }
 
-    std::vector<Box> boxes_;
+    std::vector<CoarseBox> boxes_;
     double cell_ = 1;
-    std::unordered_map<std::int64_t, std::vector<std::int64_t>> cells_;
+    std::unordered_map<std::int64_t, std::vector<std::int32_t>> cells_;
 };
 
 IncrementalValidity::IncrementalValidity(const PointMatrix& vertices, const FaceMatrix& quads, const PointMatrix& field)
-    : quads_(quads), quads_of_vertex_(std::size_t(vertices.rows())) {
+    : quads_(quads) {
     const auto started = Clock::now();
-    for (Eigen::Index q = 0; q < quads.rows(); ++q)
-        for (int k = 0; k < 4; ++k) quads_of_vertex_[std::size_t(quads(q, k))].push_back(std::int32_t(q));
+    corners_ = vertex_corners(quads, vertices.rows());
     triangles_ = mesh_triangles(vertices, quads);
     const TriangleSelfIntersections found = triangle_self_intersections(vertices, triangles_);
     pairs_ = found.pairs;
@@ -116,7 +134,7 @@ void IncrementalValidity::update(const PointMatrix& vertices, const std::vector<
                                  const std::vector<std::int32_t>& refield, const PointMatrix& field) {
     const auto started = Clock::now();
     std::vector<std::int32_t> quads = refield;
-    for (const std::int32_t v : moved) quads.insert(quads.end(), quads_of_vertex_[std::size_t(v)].begin(), quads_of_vertex_[std::size_t(v)].end());
+    for (const std::int32_t v : moved) corners_.for_each_face(v, [&](std::int32_t q) { quads.push_back(q); });
     std::sort(quads.begin(), quads.end());
     quads.erase(std::unique(quads.begin(), quads.end()), quads.end());
     if (!quads.empty()) retest(vertices, quads, field);

@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "dsreg/digital_surface.hpp"  // VertexCorners
 #include "dsreg/mesh.hpp"
 #include "dsreg/mesh_validity.hpp"
 
@@ -34,7 +35,7 @@ private:
     void retest(const PointMatrix& vertices, const std::vector<std::int32_t>& quads_to_test, const PointMatrix& field);
 
     const FaceMatrix& quads_;
-    std::vector<std::vector<std::int32_t>> quads_of_vertex_;
+    VertexCorners corners_;  ///< the quads around each vertex
     FaceMatrix triangles_;  ///< 2q, 2q + 1: the shorter-diagonal split of quad q (current positions)
     std::vector<std::pair<std::int64_t, std::int64_t>> pairs_;  ///< intersecting triangles, sorted
     std::vector<char> degenerate_;                               ///< per triangle

@@ -88,22 +88,20 @@ public:
         : volume_(volume), surface_(surface), positions_(positions),
           triangles_(mesh_triangles(positions, surface.quads)),
           inside_(voxel_centres_inside(positions, triangles_, volume.grid)),
-          quads_of_vertex_(std::size_t(surface.vertex_count())) {
+          corners_(vertex_corners(surface.quads, surface.vertex_count())) {
         pointel_vertices_.reserve(std::size_t(surface.vertex_count()));
         for (std::int64_t v = 0; v < surface.vertex_count(); ++v)
             pointel_vertices_.emplace_back(key(surface.vertex_pointels(v, 0), surface.vertex_pointels(v, 1),
                                                surface.vertex_pointels(v, 2)),
                                            std::int32_t(v));
         std::sort(pointel_vertices_.begin(), pointel_vertices_.end());
-        for (std::int64_t q = 0; q < surface.face_count(); ++q)
-            for (int k = 0; k < 4; ++k) quads_of_vertex_[std::size_t(surface.quads(q, k))].push_back(std::int32_t(q));
     }
 
     /// The vertices in `moved` are now at their rows of `positions`.
     void update(const PointMatrix& positions, const std::vector<std::int32_t>& moved) {
         if (moved.empty()) return;
         std::vector<std::int32_t> quads;
-        for (const std::int32_t v : moved) quads.insert(quads.end(), quads_of_vertex_[std::size_t(v)].begin(), quads_of_vertex_[std::size_t(v)].end());
+        for (const std::int32_t v : moved) corners_.for_each_face(v, [&](std::int32_t q) { quads.push_back(q); });
         std::sort(quads.begin(), quads.end());
         quads.erase(std::unique(quads.begin(), quads.end()), quads.end());
         const VoxelGrid& grid = volume_.grid;
@@ -161,7 +159,7 @@ private:
     PointMatrix positions_;          ///< of the last update
     FaceMatrix triangles_;           ///< 2q, 2q + 1: quad q split along its shorter diagonal at positions_
     std::vector<std::uint8_t> inside_;  ///< per voxel: its centre is inside the mesh
-    std::vector<std::vector<std::int32_t>> quads_of_vertex_;
+    VertexCorners corners_;  ///< the quads around each vertex
     std::vector<std::pair<std::int64_t, std::int32_t>> pointel_vertices_;  ///< (pointel key, vertex), sorted
 };
 
@@ -344,12 +342,6 @@ public:
           rows_(surface.quads, links_, input_field_, weights, surface.vertex_count()),
           target_rhs_(detail::fairness_target_terms(links, weights, surface.vertex_count()).rhs) {
         for (int t = 0; t < omp_get_max_threads(); ++t) row_scratch_.emplace_back(surface.vertex_count());
-        faces_of_vertex_.assign(std::size_t(surface.vertex_count()), {});
-        for (std::int64_t f = 0; f < surface.face_count(); ++f)
-            for (int k = 0; k < 4; ++k) faces_of_vertex_[std::size_t(surface.quads(f, k))].push_back(std::int32_t(f));
-        const Eigen::Index n = 3 * surface.vertex_count();
-        lower_ = Eigen::VectorXd::Constant(n, -std::numeric_limits<double>::infinity());
-        upper_ = Eigen::VectorXd::Constant(n, std::numeric_limits<double>::infinity());
         bounded_.assign(std::size_t(surface.vertex_count()), 0);
         if (o_.clamp_half_width)
             for (std::int64_t v = 0; v < surface.vertex_count(); ++v) bound_box(std::int32_t(v), *o_.clamp_half_width);
@@ -778,8 +770,9 @@ private:
         // Corrected faces: their alignment blocks with u' instead of u (eq. 5–10).
         std::vector<std::int32_t> faces;
         for (std::size_t k = first; k < last; ++k)
-            for (const std::int32_t f : faces_of_vertex_[std::size_t(part[k])])
+            rows_.corners().for_each_face(part[k], [&](std::int32_t f) {
                 if (corrected_[std::size_t(f)]) faces.push_back(f);
+            });
         std::sort(faces.begin(), faces.end());
         faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
         for (const std::int32_t f : faces) {
@@ -860,15 +853,20 @@ private:
     /// bound was added.
     bool bound_faces_of(std::int32_t v) {
         bool added = false;
-        for (const std::int32_t f : faces_of_vertex_[std::size_t(v)])
+        rows_.corners().for_each_face(v, [&](std::int32_t f) {
             for (const int side : {-1, 1})
                 added = bound_side(v, surface_.surfels[std::size_t(f)].axis, side, o_.voxel_half_width) || added;
+        });
         return added;
     }
 
     /// x_v,d ≥ p_v,d − half_width·s_d (side −1) or x_v,d ≤ p_v,d + half_width·s_d (side +1);
     /// returns whether the bound is new.
     bool bound_side(std::int32_t v, int d, int side, double half_width) {
+        if (lower_.size() == 0) {  // the first bound: every other coordinate free
+            lower_ = Eigen::VectorXd::Constant(3 * surface_.vertex_count(), -std::numeric_limits<double>::infinity());
+            upper_ = Eigen::VectorXd::Constant(lower_.size(), std::numeric_limits<double>::infinity());
+        }
         const Eigen::Index q = 3 * Eigen::Index(v) + d;
         const double limit = surface_.vertices(v, d) + side * half_width * surface_.grid.spacing[d];
         double& bound = side < 0 ? lower_[q] : upper_[q];
@@ -969,10 +967,10 @@ private:
     ValidityRepairOptions o_;
     const VertexLinks& links_;  ///< of the fairness term (E)
     VertexLinks neighbours_;  ///< across every edge: the rings of the region and of the grading
-    PointMatrix input_field_, field_;
+    const PointMatrix& input_field_;  ///< u as given (repair_validity's argument)
+    PointMatrix field_;
     PointMatrix targets_;
     Eigen::VectorXd x_;
-    std::vector<std::vector<std::int32_t>> faces_of_vertex_;
     std::vector<double> factor_;  ///< m_i
     std::vector<double> fair_factor_;         ///< n_i, the fairness factors (fairness_steps)
     std::vector<int> fair_steps_;             ///< times n_i was raised
@@ -982,7 +980,7 @@ private:
     std::vector<char> in_region_;
     std::vector<char> corrected_;      ///< faces whose u was replaced
     /// Bounds of each coordinate, interleaved (3i + d), ±∞ where free: the clamp boxes of the
-    /// reversible mode, the voxels' bounds (bound_around).
+    /// reversible mode, the voxels' bounds (bound_around); empty until the first bound.
     Eigen::VectorXd lower_, upper_;
     std::vector<char> bounded_;  ///< per vertex: some coordinate has a finite bound
     bool any_bounds_ = false;
@@ -1044,10 +1042,6 @@ ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointM
     ValidityRepairReport& report = result.report;
     validity_internal::IncrementalValidity tracker(positions, surface.quads, normals);
     report.before = report.after = tracker.validity();
-    result.positions = positions;
-    result.normals = normals;
-    result.alpha_factors = Eigen::VectorXd::Ones(surface.vertex_count());
-    result.fairness_factors = Eigen::VectorXd::Ones(surface.vertex_count());
     // A label complex (a binary surface, labels {0, 1}, has no junction): its edges give both
     // the fairness links and the junction turns.
     const bool complex = may_have_junctions(surface);
@@ -1067,7 +1061,13 @@ ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointM
         voxel_seconds += seconds_since(started);
         report.wrong_voxels_before = report.wrong_voxels_after = std::int64_t(wrong.size());
     }
-    if ((report.before.valid() && wrong.empty()) || options.max_rounds == 0) return result;
+    if ((report.before.valid() && wrong.empty()) || options.max_rounds == 0) {
+        result.positions = positions;
+        result.normals = normals;
+        result.alpha_factors = Eigen::VectorXd::Ones(surface.vertex_count());
+        result.fairness_factors = Eigen::VectorXd::Ones(surface.vertex_count());
+        return result;
+    }
 
     // Rounds on windows around what is invalid, then one exact solve of the whole region; again
     // if that solve undid the repair somewhere.
