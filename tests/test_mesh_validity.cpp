@@ -76,6 +76,25 @@ TEST(SelfIntersections, SharedVertexCountsOnlyWhenTheyMeetElsewhere) {
     EXPECT_EQ(triangle_self_intersections(crossing, pair).pairs, (Pairs{{0, 1}}));
 }
 
+TEST(SelfIntersections, SharedVertexWithCornersInOrAcrossThePlane) {
+    // Triangle 0 = (0,1,2) in z = 0 and triangle 1 = (0,3,4) sharing vertex 0. Far corners
+    // strictly on one side of the other's plane decide "apart" at once; corners in the plane or on
+    // both sides need the full test, which must still tell touching at 0 from meeting elsewhere.
+    const FaceMatrix pair = faces({{0, 1, 2}, {0, 3, 4}});
+    const auto meets = [&](std::array<double, 3> c3, std::array<double, 3> c4) {
+        const PointMatrix p = points({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, c3, c4});
+        return !triangle_self_intersections(p, pair).pairs.empty();
+    };
+    EXPECT_FALSE(meets({-1, 0, 0}, {0, -1, 0}));        // coplanar, on the other side of vertex 0
+    EXPECT_TRUE(meets({1, 0.2, 0}, {0.2, 1, 0}));        // coplanar, inside triangle 0
+    EXPECT_FALSE(meets({-1, -1, 0}, {-1, -2, 1}));       // one corner in the plane outside, one above
+    EXPECT_TRUE(meets({0.5, 0.5, 0}, {-1, -2, 1}));      // one corner in the plane inside triangle 0
+    EXPECT_FALSE(meets({-1, 0.5, -1}, {-1, 0.5, 1}));    // across the plane, beside triangle 0
+    EXPECT_TRUE(meets({0.5, 0.5, -1}, {0.5, 0.5, 1}));   // across the plane, through triangle 0
+    EXPECT_FALSE(meets({1, 1, 0.5}, {0.5, 2, 0.5}));     // above, strictly on one side
+    EXPECT_TRUE(meets({3, 0, 1}, {3, 0, -1}));           // triangle 0's edge 1–2 passes through triangle 1
+}
+
 TEST(SelfIntersections, TouchingAtCoincidentVerticesOfDistinctIndicesCounts) {
     // Vertices 0 and 3 are at the same place: the two triangles touch there without sharing it.
     const PointMatrix p = points({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 0}, {-1, 0, 0.5}, {0, -1, 0.5}});

@@ -133,9 +133,16 @@ bool triangles_meet_beyond_shared_indices(const PointMatrix& vertices, const Fac
                CGAL::coplanar_orientation(u, v, point(a, a_free), point(b, b_free)) == CGAL::POSITIVE;
     }
     const int i = a_shared[0], j = b_shared[0];
-    const Kernel::Segment_3 a_opposite(point(a, (i + 1) % 3), point(a, (i + 2) % 3));
-    const Kernel::Segment_3 b_opposite(point(b, (j + 1) % 3), point(b, (j + 2) % 3));
-    return CGAL::do_intersect(triangle(a), b_opposite) || CGAL::do_intersect(triangle(b), a_opposite);
+    const Kernel::Point_3 p = point(a, i), a1 = point(a, (i + 1) % 3), a2 = point(a, (i + 2) % 3);
+    const Kernel::Point_3 b1 = point(b, (j + 1) % 3), b2 = point(b, (j + 2) % 3);
+    // If the far corners of either triangle lie strictly on one side of the other's plane, that
+    // triangle meets the plane at p alone, which is on neither opposite edge: no meeting (the
+    // usual case of neighbouring faces, decided by two orientations instead of two
+    // triangle–segment tests).
+    const auto one_side = [](CGAL::Orientation s, CGAL::Orientation t) { return s == t && s != CGAL::COPLANAR; };
+    if (one_side(CGAL::orientation(p, a1, a2, b1), CGAL::orientation(p, a1, a2, b2))) return false;
+    if (one_side(CGAL::orientation(p, b1, b2, a1), CGAL::orientation(p, b1, b2, a2))) return false;
+    return CGAL::do_intersect(triangle(a), Kernel::Segment_3(b1, b2)) || CGAL::do_intersect(triangle(b), Kernel::Segment_3(a1, a2));
 }
 
 }  // namespace validity_internal
