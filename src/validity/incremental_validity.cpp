@@ -67,7 +67,7 @@ public:
             boxes_.emplace_back(triangle_box(vertices, triangles, t));
             extent += (boxes_.back().high - boxes_.back().low).maxCoeff();
         }
-        cell_ = std::max(2 * extent / double(std::max<Eigen::Index>(triangles.rows(), 1)), 1e-12);
+        inverse_cell_ = 1 / std::max(2 * extent / double(std::max<Eigen::Index>(triangles.rows(), 1)), 1e-12);
         for (std::size_t t = 0; t < boxes_.size(); ++t) for_cells(boxes_[t], [&](std::int64_t key) { cells_[key].push_back(std::int32_t(t)); });
     }
 
@@ -101,8 +101,8 @@ public:
 private:
     template <class Visit>
     void for_cells(const CoarseBox& box, Visit visit) const {
-        const Eigen::Array3i low = (box.low.cast<double>() / cell_).floor().cast<int>(),
-                             high = (box.high.cast<double>() / cell_).floor().cast<int>();
+        const Eigen::Array3i low = (box.low.cast<double>() * inverse_cell_).floor().cast<int>(),
+                             high = (box.high.cast<double>() * inverse_cell_).floor().cast<int>();
         for (int z = low.z(); z <= high.z(); ++z)
             for (int y = low.y(); y <= high.y(); ++y)
                 for (int x = low.x(); x <= high.x(); ++x)
@@ -110,7 +110,7 @@ private:
     }
 
     std::vector<CoarseBox> boxes_;
-    double cell_ = 1;
+    double inverse_cell_ = 1;  ///< 1 / the side of a cell
     std::unordered_map<std::int64_t, std::vector<std::int32_t>> cells_;
 };
 
