@@ -138,13 +138,16 @@ void multiply_symmetric_upper(const BlockMatrixT<Scalar>& a, const Eigen::Vector
     const double sign = subtract ? -1.0 : 1.0;
     if (!subtract) y.setZero(3 * a.rows);
     if (threads > 1) scratch.resize(std::size_t(threads - 1));
+    std::vector<std::int64_t> reach(std::size_t(threads), 0);  // each accumulator's rows end here
 #pragma omp parallel num_threads(threads)
     {
         const int t = omp_get_thread_num(), nt = omp_get_num_threads();
-        const bool last_range = t == nt - 1;  // scatters only into its own rows (j ≥ i)
-        Eigen::VectorXd& spill = last_range ? y : scratch[std::size_t(t)];
-        if (!last_range) spill.setZero(3 * a.rows);
         const std::int64_t first = a.rows * t / nt, last = a.rows * (t + 1) / nt;
+        // Rows j ≥ i below `last` are this thread's: straight into y. Rows beyond go to its
+        // accumulator, zeroed as far as they reach (with the mesh's vertex order, a band).
+        Eigen::VectorXd* beyond = t + 1 < nt ? &scratch[std::size_t(t)] : nullptr;
+        if (beyond && beyond->size() != 3 * a.rows) beyond->resize(3 * a.rows);
+        std::int64_t end = last;  // the accumulator's rows [last, end) are in use
         for (std::int64_t i = first; i < last; ++i) {
             const Eigen::Vector3d xi = sign * x.segment<3>(3 * i);
             Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -152,14 +155,26 @@ void multiply_symmetric_upper(const BlockMatrixT<Scalar>& a, const Eigen::Vector
                 const std::int64_t j = a.column[std::size_t(q)];
                 const Eigen::Matrix3d b = a.block[std::size_t(q)].template cast<double>();
                 sum.noalias() += b * x.segment<3>(3 * j);
-                if (j != i) spill.segment<3>(3 * j).noalias() += b.transpose() * xi;
+                if (j == i) continue;
+                if (j < last) {
+                    y.segment<3>(3 * j).noalias() += b.transpose() * xi;
+                    continue;
+                }
+                if (j >= end) {
+                    beyond->segment(3 * end, 3 * (j + 1 - end)).setZero();
+                    end = j + 1;
+                }
+                beyond->segment<3>(3 * j).noalias() += b.transpose() * xi;
             }
             y.segment<3>(3 * i) += sign * sum;
         }
+        reach[std::size_t(t)] = end;
         if (nt > 1) {
 #pragma omp barrier
-            const std::int64_t n = 3 * a.rows, begin = n * t / nt, end = n * (t + 1) / nt;
-            for (int u = 0; u + 1 < nt; ++u) y.segment(begin, end - begin) += scratch[std::size_t(u)].segment(begin, end - begin);
+            for (int u = 0; u < t; ++u) {  // the threads before this one reach into its rows
+                const std::int64_t stop = std::min(last, reach[std::size_t(u)]);
+                if (stop > first) y.segment(3 * first, 3 * (stop - first)) += scratch[std::size_t(u)].segment(3 * first, 3 * (stop - first));
+            }
         }
     }
 }

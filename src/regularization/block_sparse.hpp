@@ -195,7 +195,8 @@ void keep_upper_triangle(BlockMatrixT<Scalar>& a);
 /// (keep_upper_triangle): each stored block A_ij gives A_ij x_j to row i and A_ijᵀ x_i to row j,
 /// so a level needs half its blocks and reads each once. Rows in parallel, in one contiguous range
 /// per thread; what a thread adds to rows beyond its range goes to its accumulator in `scratch`
-/// (one per thread but the last, whose range ends the matrix), and the accumulators are summed.
+/// (one per thread but the last, whose range ends the matrix; only the band of rows it reaches is
+/// zeroed and summed).
 template <class Scalar>
 void multiply_symmetric_upper(const BlockMatrixT<Scalar>& upper, const Eigen::VectorXd& x, Eigen::VectorXd& y,
                               std::vector<Eigen::VectorXd>& scratch, bool subtract);
