@@ -465,18 +465,31 @@ std::vector<std::int64_t> component_euler_characteristics(const DigitalSurface& 
     return chi;
 }
 
+namespace {
+
+/// Compressed rows over the vertices of `faces`: row i lists value(f, e) for each corner e of a
+/// face f at vertex i, in increasing f (a counting sort of the corners by vertex).
+template <class Value>
+void rows_of_corners(const FaceMatrix& faces, std::int64_t vertex_count, std::vector<std::int64_t>& offsets,
+                     std::vector<std::int32_t>& values, Value value) {
+    const std::int64_t k = faces.cols();
+    offsets.assign(static_cast<std::size_t>(vertex_count + 1), 0);
+    for (std::int64_t f = 0; f < faces.rows(); ++f)
+        for (std::int64_t e = 0; e < k; ++e) ++offsets[static_cast<std::size_t>(faces(f, e) + 1)];
+    std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
+    values.resize(static_cast<std::size_t>(offsets.back()));
+    std::vector<std::int64_t> cursor(offsets.begin(), offsets.end() - 1);
+    for (std::int64_t f = 0; f < faces.rows(); ++f)
+        for (std::int64_t e = 0; e < k; ++e) values[static_cast<std::size_t>(cursor[static_cast<std::size_t>(faces(f, e))]++)] = value(f, e);
+}
+
+}  // namespace
+
 VertexLinks vertex_links(const FaceMatrix& faces, std::int64_t vertex_count) {
     VertexLinks links;
-    links.offsets.assign(static_cast<std::size_t>(vertex_count + 1), 0);
     const std::int64_t k = faces.cols();
-    for (std::int64_t f = 0; f < faces.rows(); ++f)
-        for (std::int64_t e = 0; e < k; ++e) ++links.offsets[static_cast<std::size_t>(faces(f, e) + 1)];
-    std::partial_sum(links.offsets.begin(), links.offsets.end(), links.offsets.begin());
-    links.neighbors.resize(static_cast<std::size_t>(links.offsets.back()));
-    std::vector<std::int64_t> cursor(links.offsets.begin(), links.offsets.end() - 1);
-    for (std::int64_t f = 0; f < faces.rows(); ++f)
-        for (std::int64_t e = 0; e < k; ++e)
-            links.neighbors[static_cast<std::size_t>(cursor[static_cast<std::size_t>(faces(f, e))]++)] = faces(f, (e + 1) % k);
+    rows_of_corners(faces, vertex_count, links.offsets, links.neighbors,
+                    [&](std::int64_t f, std::int64_t e) { return faces(f, (e + 1) % k); });
     return links;
 }
 
@@ -486,15 +499,8 @@ VertexCorners vertex_corners(const FaceMatrix& faces, std::int64_t vertex_count)
         throw Error("too many faces for 32-bit corner codes (" + std::to_string(faces.rows()) + ")");
     VertexCorners corners;
     corners.face_size = std::int32_t(k);
-    corners.offsets.assign(static_cast<std::size_t>(vertex_count + 1), 0);
-    for (std::int64_t f = 0; f < faces.rows(); ++f)
-        for (std::int64_t e = 0; e < k; ++e) ++corners.offsets[static_cast<std::size_t>(faces(f, e) + 1)];
-    std::partial_sum(corners.offsets.begin(), corners.offsets.end(), corners.offsets.begin());
-    corners.codes.resize(static_cast<std::size_t>(corners.offsets.back()));
-    std::vector<std::int64_t> cursor(corners.offsets.begin(), corners.offsets.end() - 1);
-    for (std::int64_t f = 0; f < faces.rows(); ++f)
-        for (std::int64_t e = 0; e < k; ++e)
-            corners.codes[static_cast<std::size_t>(cursor[static_cast<std::size_t>(faces(f, e))]++)] = std::int32_t(f * k + e);
+    rows_of_corners(faces, vertex_count, corners.offsets, corners.codes,
+                    [&](std::int64_t f, std::int64_t e) { return std::int32_t(f * k + e); });
     return corners;
 }
 
