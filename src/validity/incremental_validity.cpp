@@ -35,8 +35,6 @@ void sort_unique(std::vector<std::int64_t>& values) {
     values.erase(std::unique(values.begin(), values.end()), values.end());
 }
 
-}  // namespace
-
 /// A box in single precision, rounded outwards: it contains the box it was made from, so the
 /// candidate pairs it gives are a superset of the exact boxes' (the pairs are decided by the
 /// exact predicate) in half the memory.
@@ -53,6 +51,8 @@ struct CoarseBox {
     }
     bool overlaps(const CoarseBox& o) const { return (low <= o.high).all() && (o.low <= high).all(); }
 };
+
+}  // namespace
 
 /// Triangles bucketed by the cubic cells their bounding boxes overlap, kept up to date as they
 /// move: building it costs a hash-map entry per triangle and cell, so it is built once, with
