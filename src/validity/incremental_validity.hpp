@@ -29,6 +29,9 @@ public:
     /// The current state as check_mesh_validity reports it (seconds: of all checks so far).
     MeshValidity validity() const;
 
+    /// The quads around each vertex (vertex_corners of the quads).
+    const VertexCorners& corners() const { return corners_; }
+
 private:
     class BoxGrid;
 

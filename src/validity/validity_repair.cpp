@@ -85,11 +85,13 @@ void check_inputs(const DigitalSurface& surface, const PointMatrix& normals, con
 /// voxels of its cube.
 class VoxelSides {
 public:
-    VoxelSides(const BinaryVolume& volume, const DigitalSurface& surface, const PointMatrix& positions)
+    /// `corners`: the quads around each vertex of surface (the incremental check's), kept by reference.
+    VoxelSides(const BinaryVolume& volume, const DigitalSurface& surface, const PointMatrix& positions,
+               const VertexCorners& corners)
         : volume_(volume), surface_(surface), positions_(positions),
           triangles_(mesh_triangles(positions, surface.quads)),
           inside_(voxel_centres_inside(positions, triangles_, volume.grid)),
-          corners_(vertex_corners(surface.quads, surface.vertex_count())) {
+          corners_(corners) {
         pointel_vertices_.reserve(std::size_t(surface.vertex_count()));
         for (std::int64_t v = 0; v < surface.vertex_count(); ++v)
             pointel_vertices_.emplace_back(key(surface.vertex_pointels(v, 0), surface.vertex_pointels(v, 1),
@@ -160,7 +162,7 @@ private:
     PointMatrix positions_;          ///< of the last update
     FaceMatrix triangles_;           ///< 2q, 2q + 1: quad q split along its shorter diagonal at positions_
     std::vector<std::uint8_t> inside_;  ///< per voxel: its centre is inside the mesh
-    VertexCorners corners_;  ///< the quads around each vertex
+    const VertexCorners& corners_;  ///< the quads around each vertex
     std::vector<std::pair<std::int64_t, std::int32_t>> pointel_vertices_;  ///< (pointel key, vertex), sorted
 };
 
@@ -1085,7 +1087,7 @@ ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointM
     double voxel_seconds = 0;
     if (options.voxels && !options.clamp_half_width) {
         const auto started = Clock::now();
-        sides.emplace(*options.voxels, surface, positions);
+        sides.emplace(*options.voxels, surface, positions, tracker.corners());
         wrong = sides->wrong();
         voxel_seconds += seconds_since(started);
         report.wrong_voxels_before = report.wrong_voxels_after = std::int64_t(wrong.size());
