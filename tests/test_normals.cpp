@@ -8,6 +8,7 @@
 
 #include "dsreg/error.hpp"
 #include "dsreg/normals.hpp"
+#include "../src/normals/integral_invariant_sums.hpp"
 #include "test_support.hpp"
 
 namespace dsreg {
@@ -114,6 +115,38 @@ TEST(Normals, RowSumsEqualBruteForceOnAnisotropicGrid) {
             EXPECT_LT(angle_deg(u.row(f).transpose(), expected), 1e-4) << kernel_name(kernel) << " face " << f;
         }
     }
+}
+
+TEST(Normals, NestedBallsGiveEachBallsOwnNormalToTheBit) {
+    // Two concentric balls summed in one pass over the larger one's rows: the same sums in the
+    // same order as each ball alone, so the same normals bit for bit, whatever the kernel, the
+    // spacing and the label (runs of three labels and of the background in every row).
+    std::mt19937 rng(5);
+    std::uniform_int_distribution<int> label(0, 3);
+    LabelVolume v;
+    v.grid.dims = {13, 11, 9};
+    v.grid.spacing = Eigen::Vector3d(0.8, 1.0, 1.7);
+    v.labels.resize(std::size_t(v.grid.voxel_count()));
+    for (auto& l : v.labels) l = std::uint32_t(label(rng));
+    v.values = {0, 10, 20, 30};
+    const DigitalSurface s = extract_digital_surface(v, Connectivity::TwentySix);
+    const detail::RowRuns rows = detail::build_part_runs(v, s);
+    ASSERT_GT(s.face_count(), 500);
+    for (IntegralInvariantKernel kernel : {IntegralInvariantKernel::ball, IntegralInvariantKernel::biweight})
+        for (const auto& [outer, inner] : {std::pair{4.1, 2.9}, std::pair{3.0, 2.99}, std::pair{5.5, 1.2}}) {
+            const detail::IntegralInvariantBall big(v.grid.spacing, outer, kernel), small(v.grid.spacing, inner, kernel);
+            const detail::NestedIntegralInvariantBalls both(v.grid.spacing, outer, inner, kernel);
+            std::int64_t different = 0;
+            for (std::int64_t f = 0; f < s.face_count(); ++f) {
+                const Surfel& x = s.surfels[std::size_t(f)];
+                const std::uint32_t part = detail::run_label_at(rows, v.grid.dims, x.voxel);
+                const auto [n_outer, n_inner] = both.normals(v.grid.dims, rows, x, part);
+                different += n_outer != big.normal(v.grid.dims, rows, x, part) ? 1 : 0;
+                different += n_inner != small.normal(v.grid.dims, rows, x, part) ? 1 : 0;
+            }
+            EXPECT_EQ(different, 0) << kernel_name(kernel) << " radii " << outer << ", " << inner;
+        }
+    EXPECT_THROW(detail::NestedIntegralInvariantBalls(v.grid.spacing, 2.0, 2.0, IntegralInvariantKernel::ball), Error);
 }
 
 TEST(Normals, VoxelsWiresAndBarsThinnerThanTheBallGetTheirOwnFacesNormals) {

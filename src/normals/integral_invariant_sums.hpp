@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "dsreg/digital_surface.hpp"
@@ -49,10 +50,13 @@ struct RowSums {
 };
 
 /// One row of a ball stencil: offsets (dj, dk), the x offsets t ∈ [t_lo, t_hi] inside the ball,
-/// and `prefix` such that prefix[i] sums t_lo … t_lo + i − 1 (t_hi − t_lo + 2 entries).
+/// and `prefix` such that prefix[i] sums t_lo … t_lo + i − 1 (t_hi − t_lo + 2 entries; the first
+/// is zero, the last the row's total, kept here too: a run across the whole row or up to its end
+/// reads no table entry, or one).
 struct StencilRow {
     std::int32_t dj, dk, t_lo, t_hi;
     std::int64_t prefix;  ///< index of the row's first entry in Stencil::prefix_sums
+    RowSums total;        ///< = prefix_sums[prefix + t_hi − t_lo + 1]
 };
 
 struct Stencil {
@@ -78,9 +82,33 @@ public:
     double radius() const { return radius_; }
 
 private:
+    friend class NestedIntegralInvariantBalls;
+    const Stencil& stencil(const Surfel& s) const { return stencils_[s.axis][s.sign > 0 ? 1 : 0]; }
+
     Eigen::Vector3d spacing_;
     double radius_;
     Stencil stencils_[3][2];  ///< [axis][sign > 0]
+};
+
+/// Two concentric balls of one kernel, radii outer > inner, summed in one pass: the inner ball's
+/// rows are rows of the outer one (the same offsets (dj, dk), a sub-range of t), so each row's
+/// runs are read once for both. The cost of the outer ball alone, for the two normals.
+class NestedIntegralInvariantBalls {
+public:
+    /// Throws dsreg::Error as IntegralInvariantBall does, or if inner_radius ≥ outer_radius.
+    NestedIntegralInvariantBalls(const Eigen::Vector3d& spacing, double outer_radius, double inner_radius,
+                                 IntegralInvariantKernel kernel);
+
+    /// The normals of surfel s in the outer and the inner ball: each the same, to the bit, as
+    /// IntegralInvariantBall::normal of that ball (the same sums in the same order).
+    std::pair<Eigen::Vector3d, Eigen::Vector3d> normals(const Index3& dims, const RowRuns& rows, const Surfel& s,
+                                                        std::uint32_t label) const;
+
+private:
+    IntegralInvariantBall outer_, inner_;
+    /// For each row of the outer stencil [axis][sign > 0], the index of the inner stencil's row
+    /// with the same (dj, dk), or −1.
+    std::vector<std::int32_t> inner_row_of_[3][2];
 };
 
 }  // namespace dsreg::detail

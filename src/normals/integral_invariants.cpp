@@ -168,7 +168,7 @@ Stencil ball_stencil(const Eigen::Vector3d& spacing, int axis, int sign, double 
             if (rest < 0) continue;
             const auto [t0, t1] = range(0, std::sqrt(rest));
             if (t0 > t1) continue;
-            stencil.rows.push_back({dj, dk, t0, t1, std::int64_t(stencil.prefix_sums.size())});
+            const std::int64_t first = std::int64_t(stencil.prefix_sums.size());
             RowSums sum;
             stencil.prefix_sums.push_back(sum);
             for (std::int32_t t = t0; t <= t1; ++t) {
@@ -179,6 +179,7 @@ Stencil ball_stencil(const Eigen::Vector3d& spacing, int axis, int sign, double 
                 sum.wtt += w * double(t) * t;
                 stencil.prefix_sums.push_back(sum);
             }
+            stencil.rows.push_back({dj, dk, t0, t1, first, sum});
         }
     }
     return stencil;
@@ -191,43 +192,113 @@ struct LatticeMoments {
     double stt = 0, sjj = 0, skk = 0, stj = 0, stk = 0, sjk = 0;  // second moments
 };
 
+/// Adds the part [lo, hi] (offsets from the surfel's voxel) of a run to the sums of one stencil
+/// row, where it meets the row's range.
+inline void add_run(const StencilRow& row, const RowSums* prefix, std::int64_t lo, std::int64_t hi, RowSums& sum) {
+    lo = std::max<std::int64_t>(lo, row.t_lo);
+    hi = std::min<std::int64_t>(hi, row.t_hi);
+    if (lo > hi) return;
+    const RowSums& b = hi == row.t_hi ? row.total : prefix[hi - row.t_lo + 1];
+    if (lo == row.t_lo) {  // prefix[0] = 0: b − 0 is b, to the bit
+        sum.w += b.w;
+        sum.wt += b.wt;
+        sum.wtt += b.wtt;
+        return;
+    }
+    const RowSums& a = prefix[lo - row.t_lo];
+    sum.w += b.w - a.w;
+    sum.wt += b.wt - a.wt;
+    sum.wtt += b.wtt - a.wtt;
+}
+
+/// Adds a row's sums, at offsets (dj, dk), to the moments.
+inline void add_row(const StencilRow& row, const RowSums& sum, LatticeMoments& m) {
+    if (sum.w == 0) return;
+    m.n += sum.w;
+    m.st += sum.wt;
+    m.stt += sum.wtt;
+    m.sj += sum.w * row.dj;
+    m.sk += sum.w * row.dk;
+    m.sjj += sum.w * row.dj * row.dj;
+    m.skk += sum.w * row.dk * row.dk;
+    m.sjk += sum.w * row.dj * row.dk;
+    m.stj += sum.wt * row.dj;
+    m.stk += sum.wt * row.dk;
+}
+
+/// The runs of grid row (j0 + row.dj, k0 + row.dk) as indices [first, last) into rows.runs, or
+/// false if the row is outside the grid.
+inline bool row_runs(const Index3& d, const RowRuns& rows, std::int64_t j0, std::int64_t k0, const StencilRow& row,
+              std::int64_t& first, std::int64_t& last) {
+    const std::int64_t j = j0 + row.dj, k = k0 + row.dk;
+    if (j < 0 || k < 0 || j >= d[1] || k >= d[2]) return false;
+    const std::int64_t id = j + d[1] * k;
+    first = rows.row_first[std::size_t(id)];
+    last = rows.row_first[std::size_t(id + 1)];
+    return true;
+}
+
 /// The moments of the voxels of `label` in the ball of surfel s.
 LatticeMoments ball_moments(const Index3& d, const RowRuns& rows, const Surfel& s, std::uint32_t label,
                             const Stencil& stencil) {
-    const std::int64_t i0 = s.voxel[0], j0 = s.voxel[1], k0 = s.voxel[2];
+    const std::int64_t i0 = s.voxel[0];
     LatticeMoments m;
     for (const StencilRow& row : stencil.rows) {
-        const std::int64_t j = j0 + row.dj, k = k0 + row.dk;
-        if (j < 0 || k < 0 || j >= d[1] || k >= d[2]) continue;
-        const std::int64_t id = j + d[1] * k;
+        std::int64_t first, last;
+        if (!row_runs(d, rows, s.voxel[1], s.voxel[2], row, first, last)) continue;
         const RowSums* prefix = stencil.prefix_sums.data() + row.prefix;
         RowSums sum;
-        for (std::int64_t q = rows.row_first[std::size_t(id)]; q < rows.row_first[std::size_t(id + 1)]; ++q) {
+        for (std::int64_t q = first; q < last; ++q) {
             const auto& run = rows.runs[std::size_t(q)];
             if (run[0] - i0 > row.t_hi) break;  // runs in x order: the rest lie beyond the ball
             if (rows.labels[std::size_t(q)] != label) continue;
-            const std::int64_t lo = std::max<std::int64_t>(run[0] - i0, row.t_lo);
-            const std::int64_t hi = std::min<std::int64_t>(run[1] - i0, row.t_hi);
-            if (lo > hi) continue;
-            const RowSums& a = prefix[lo - row.t_lo];
-            const RowSums& b = prefix[hi - row.t_lo + 1];
-            sum.w += b.w - a.w;
-            sum.wt += b.wt - a.wt;
-            sum.wtt += b.wtt - a.wtt;
+            add_run(row, prefix, run[0] - i0, run[1] - i0, sum);
         }
-        if (sum.w == 0) continue;
-        m.n += sum.w;
-        m.st += sum.wt;
-        m.stt += sum.wtt;
-        m.sj += sum.w * row.dj;
-        m.sk += sum.w * row.dk;
-        m.sjj += sum.w * row.dj * row.dj;
-        m.skk += sum.w * row.dk * row.dk;
-        m.sjk += sum.w * row.dj * row.dk;
-        m.stj += sum.wt * row.dj;
-        m.stk += sum.wt * row.dk;
+        add_row(row, sum, m);
     }
     return m;
+}
+
+/// The moments of two concentric balls in one pass over the outer stencil's rows (ball_moments of
+/// each, the same sums in the same order): `inner_row_of` maps an outer row to the inner row of
+/// the same (dj, dk), or −1; the inner rows' t ranges lie within the outer ones'.
+std::pair<LatticeMoments, LatticeMoments> nested_ball_moments(const Index3& d, const RowRuns& rows, const Surfel& s,
+                                                              std::uint32_t label, const Stencil& outer,
+                                                              const Stencil& inner,
+                                                              const std::vector<std::int32_t>& inner_row_of) {
+    const std::int64_t i0 = s.voxel[0];
+    LatticeMoments m_outer, m_inner;
+    for (std::size_t r = 0; r < outer.rows.size(); ++r) {
+        const StencilRow& row = outer.rows[r];
+        std::int64_t first, last;
+        if (!row_runs(d, rows, s.voxel[1], s.voxel[2], row, first, last)) continue;
+        const RowSums* prefix = outer.prefix_sums.data() + row.prefix;
+        const std::int32_t r_inner = inner_row_of[r];
+        RowSums sum;
+        if (r_inner < 0) {
+            for (std::int64_t q = first; q < last; ++q) {
+                const auto& run = rows.runs[std::size_t(q)];
+                if (run[0] - i0 > row.t_hi) break;
+                if (rows.labels[std::size_t(q)] != label) continue;
+                add_run(row, prefix, run[0] - i0, run[1] - i0, sum);
+            }
+            add_row(row, sum, m_outer);
+            continue;
+        }
+        const StencilRow& row_inner = inner.rows[std::size_t(r_inner)];
+        const RowSums* prefix_inner = inner.prefix_sums.data() + row_inner.prefix;
+        RowSums sum_inner;
+        for (std::int64_t q = first; q < last; ++q) {
+            const auto& run = rows.runs[std::size_t(q)];
+            if (run[0] - i0 > row.t_hi) break;
+            if (rows.labels[std::size_t(q)] != label) continue;
+            add_run(row, prefix, run[0] - i0, run[1] - i0, sum);
+            add_run(row_inner, prefix_inner, run[0] - i0, run[1] - i0, sum_inner);
+        }
+        add_row(row, sum, m_outer);
+        add_row(row_inner, sum_inner, m_inner);
+    }
+    return {m_outer, m_inner};
 }
 
 /// Below this relative gap (λ2 − λ1)/λ2 between the two smallest eigenvalues of the covariance,
@@ -317,6 +388,38 @@ Eigen::Vector3d IntegralInvariantBall::normal(const Index3& dims, const RowRuns&
     return normal_from_moments(m, s, spacing_);
 }
 
+NestedIntegralInvariantBalls::NestedIntegralInvariantBalls(const Eigen::Vector3d& spacing, double outer_radius,
+                                                           double inner_radius, IntegralInvariantKernel kernel)
+    : outer_(spacing, outer_radius, kernel), inner_(spacing, inner_radius, kernel) {
+    if (!(inner_radius < outer_radius)) throw Error("nested integral-invariant balls: the inner radius must be the smaller");
+    for (int axis = 0; axis < 3; ++axis)
+        for (int side = 0; side < 2; ++side) {
+            const Stencil& outer = outer_.stencils_[axis][side];
+            const Stencil& inner = inner_.stencils_[axis][side];
+            std::vector<std::int32_t>& map = inner_row_of_[axis][side];
+            map.assign(outer.rows.size(), -1);
+            // Both stencils list their rows by (dk, dj) ascending: one merge.
+            std::size_t q = 0;
+            for (std::size_t r = 0; r < outer.rows.size() && q < inner.rows.size(); ++r) {
+                const StencilRow& a = outer.rows[r];
+                const StencilRow& b = inner.rows[q];
+                if (a.dk != b.dk || a.dj != b.dj) continue;
+                if (b.t_lo < a.t_lo || b.t_hi > a.t_hi) throw Error("nested integral-invariant balls: rows not nested");
+                map[r] = std::int32_t(q++);
+            }
+            if (q != inner.rows.size()) throw Error("nested integral-invariant balls: rows not nested");
+        }
+}
+
+std::pair<Eigen::Vector3d, Eigen::Vector3d> NestedIntegralInvariantBalls::normals(const Index3& dims,
+                                                                                  const RowRuns& rows, const Surfel& s,
+                                                                                  std::uint32_t label) const {
+    const int side = s.sign > 0 ? 1 : 0;
+    const auto [outer, inner] =
+        nested_ball_moments(dims, rows, s, label, outer_.stencil(s), inner_.stencil(s), inner_row_of_[s.axis][side]);
+    return {normal_from_moments(outer, s, outer_.spacing_), normal_from_moments(inner, s, inner_.spacing_)};
+}
+
 }  // namespace detail
 
 namespace {
@@ -351,8 +454,15 @@ PointMatrix extrapolated_from_runs(const VoxelGrid& grid, const RowRuns& rows, c
                                    double radius, IntegralInvariantKernel kernel) {
     // n(r) = n0 + b·r² + O(r⁴) (b: the curvature variation across the ball), so with
     // r' = r/√2, 2·n(r') − n(r) = n0 + O(r⁴): Richardson extrapolation to r = 0.
-    const PointMatrix wide = normals_from_runs(grid, rows, surface, radius, kernel);
-    const PointMatrix narrow = normals_from_runs(grid, rows, surface, radius / std::sqrt(2.0), kernel);
+    const detail::NestedIntegralInvariantBalls balls(grid.spacing, radius, radius / std::sqrt(2.0), kernel);
+    PointMatrix wide(surface.face_count(), 3), narrow(surface.face_count(), 3);
+#pragma omp parallel for schedule(dynamic, 256)
+    for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+        const Surfel& s = surface.surfels[std::size_t(f)];
+        const auto [n_wide, n_narrow] = balls.normals(grid.dims, rows, s, detail::run_label_at(rows, grid.dims, s.voxel));
+        wide.row(f) = n_wide.transpose();
+        narrow.row(f) = n_narrow.transpose();
+    }
     const double agreement = std::cos(30.0 * M_PI / 180.0);
     PointMatrix u(surface.face_count(), 3);
 #pragma omp parallel for schedule(static)
