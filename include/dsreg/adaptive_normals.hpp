@@ -70,8 +70,11 @@ struct AdaptiveNormalField {
 
 /// The adaptive field. Steps: II at the narrow radius of the thick parts, max_radius/√2, on every
 /// surfel (the first field); the reach along it (cap max_radius/reach_factor + one voxel); II at
-/// each surfel's radius; the narrow radius where missing and the extrapolation. Cost: about that
-/// of extrapolated_integral_invariant_normals at max_radius plus two distance transforms.
+/// each surfel's radius; the narrow radius where missing and the extrapolation. Where the distance
+/// maps make max_radius likely (thick on both sides), the first field and the one at max_radius
+/// are summed in one pass over the larger ball's rows; the guess decides the work, not the field.
+/// Cost: about that of extrapolated_integral_invariant_normals at max_radius plus two distance
+/// transforms.
 /// Throws dsreg::Error for radii that are not positive and finite, min_radius > max_radius, a
 /// reach factor that is not positive, or fewer than two levels per octave.
 /// On a label map's complex each face's field is that of its inner label's indicator, and its

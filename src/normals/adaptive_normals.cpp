@@ -33,25 +33,48 @@ struct RadiusLevels {
     }
 };
 
-/// II normals at a per-surfel level; a negative level leaves the row at zero (not wanted). One
-/// ball (six stencils) per level used.
-PointMatrix normals_at_levels(const VoxelLabels& volume, const detail::RowRuns& rows, const DigitalSurface& surface,
-                              const RadiusLevels& levels, const std::vector<int>& level, IntegralInvariantKernel kernel) {
-    std::map<int, std::vector<std::int64_t>> faces_of_level;
-    for (std::int64_t f = 0; f < surface.face_count(); ++f)
-        if (level[std::size_t(f)] >= 0) faces_of_level[level[std::size_t(f)]].push_back(f);
-    PointMatrix u = PointMatrix::Zero(surface.face_count(), 3);
-    for (const auto& [l, faces] : faces_of_level) {
-        const detail::IntegralInvariantBall ball(volume.grid().spacing, levels.radius(l), kernel);
+/// II normals of the faces at up to two levels each, into `first` at first_level[f] and `second`
+/// at second_level[f] (a negative level: not wanted; both wanted: first_level < second_level, the
+/// larger ball first). One ball (six stencils) per level or pair of levels used; a face that wants
+/// both has them from one pass over its larger ball's rows (NestedIntegralInvariantBalls).
+void normals_at_levels(const VoxelLabels& volume, const detail::RowRuns& rows, const DigitalSurface& surface,
+                       const RadiusLevels& levels, const std::vector<int>& first_level,
+                       const std::vector<int>& second_level, IntegralInvariantKernel kernel, PointMatrix& first,
+                       PointMatrix& second) {
+    std::map<std::pair<int, int>, std::vector<std::int64_t>> faces_of_levels;
+    for (int direction = 0; direction < 6; ++direction)  // faces of one direction together: one stencil's tables in cache
+        for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+            const Surfel& s = surface.surfels[std::size_t(f)];
+            if (2 * s.axis + (s.sign > 0 ? 1 : 0) != direction) continue;
+            const int a = first_level[std::size_t(f)], b = second_level[std::size_t(f)];
+            if (a >= 0 || b >= 0) faces_of_levels[{a, b}].push_back(f);
+        }
+    const Index3& dims = volume.grid().dims;
+    const Eigen::Vector3d& spacing = volume.grid().spacing;
+    for (const auto& [pair, faces] : faces_of_levels) {
+        const auto [a, b] = pair;
         const std::int64_t n = std::int64_t(faces.size());
+        if (a >= 0 && b >= 0) {
+            const detail::NestedIntegralInvariantBalls balls(spacing, levels.radius(a), levels.radius(b), kernel);
+#pragma omp parallel for schedule(dynamic, 256)
+            for (std::int64_t i = 0; i < n; ++i) {
+                const std::int64_t f = faces[std::size_t(i)];
+                const Surfel& s = surface.surfels[std::size_t(f)];
+                const auto [n_first, n_second] = balls.normals(dims, rows, s, detail::run_label_at(rows, dims, s.voxel));
+                first.row(f) = n_first.transpose();
+                second.row(f) = n_second.transpose();
+            }
+            continue;
+        }
+        const detail::IntegralInvariantBall ball(spacing, levels.radius(std::max(a, b)), kernel);
+        PointMatrix& out = a >= 0 ? first : second;
 #pragma omp parallel for schedule(dynamic, 256)
         for (std::int64_t i = 0; i < n; ++i) {
             const std::int64_t f = faces[std::size_t(i)];
             const Surfel& s = surface.surfels[std::size_t(f)];
-            u.row(f) = ball.normal(volume.grid().dims, rows, s, detail::run_label_at(rows, volume.grid().dims, s.voxel)).transpose();
+            out.row(f) = ball.normal(dims, rows, s, detail::run_label_at(rows, dims, s.voxel)).transpose();
         }
     }
-    return u;
 }
 
 void check_options(const AdaptiveNormalOptions& o) {
@@ -76,27 +99,21 @@ Eigen::RowVector3d extrapolated_normal(const Eigen::RowVector3d& wide, const Eig
     return (wide + (size > threshold ? (size - threshold) / size : 0.0) * correction).normalized();
 }
 
-/// The extrapolated field where the radius allows (see extrapolated_normal); `pilot` is n(r/√2)
-/// where r = max_radius.
-void extrapolate_field(const VoxelLabels& volume, const detail::RowRuns& rows, const DigitalSurface& surface,
-                       const RadiusLevels& levels, const std::vector<int>& level, const PointMatrix& pilot,
-                       int pilot_level, const AdaptiveNormalOptions& o, AdaptiveNormalField& field) {
-    const std::int64_t m = surface.face_count();
-    const int half_octave = o.levels_per_octave / 2, last = levels.count() - 1;
-    // The narrow field n(r/√2): the pilot where r = max_radius, computed where it is missing.
-    std::vector<int> missing(static_cast<std::size_t>(m), -1);
-    for (std::int64_t f = 0; f < m; ++f) {
-        const int narrow = std::min(level[std::size_t(f)] + half_octave, last);
-        if (field.radius[f] >= o.extrapolation_min_radius && narrow != pilot_level && narrow != level[std::size_t(f)])
-            missing[std::size_t(f)] = narrow;
-    }
-    const PointMatrix extra = normals_at_levels(volume, rows, surface, levels, missing, o.kernel);
+/// The level of the narrow field n(r/√2) that the extrapolation of face f needs, or −1 where it
+/// does not extrapolate (r below extrapolation_min_radius, or r the smallest level already).
+int narrow_level(const RadiusLevels& levels, int level, double radius, const AdaptiveNormalOptions& o) {
+    const int narrow = std::min(level + o.levels_per_octave / 2, levels.count() - 1);
+    return radius < o.extrapolation_min_radius || narrow == level ? -1 : narrow;
+}
+
+/// The extrapolated field where the radius allows (see extrapolated_normal): `narrow` holds
+/// n(r/√2) of each face that extrapolates.
+void extrapolate_field(const DigitalSurface& surface, const RadiusLevels& levels, const std::vector<int>& level,
+                       const PointMatrix& narrow, const AdaptiveNormalOptions& o, AdaptiveNormalField& field) {
 #pragma omp parallel for schedule(static)
-    for (std::int64_t f = 0; f < m; ++f) {
-        const int narrow = std::min(level[std::size_t(f)] + half_octave, last);
-        if (field.radius[f] < o.extrapolation_min_radius || narrow == level[std::size_t(f)]) continue;
-        const Eigen::RowVector3d n_narrow = missing[std::size_t(f)] >= 0 ? extra.row(f) : pilot.row(f);
-        field.normals.row(f) = extrapolated_normal(field.normals.row(f), n_narrow, o);
+    for (std::int64_t f = 0; f < surface.face_count(); ++f) {
+        if (narrow_level(levels, level[std::size_t(f)], field.radius[f], o) < 0) continue;
+        field.normals.row(f) = extrapolated_normal(field.normals.row(f), narrow.row(f), o);
         field.extrapolated[f] = 1;
     }
 }
@@ -131,6 +148,31 @@ std::vector<int> radius_levels(const VoxelLabels& volume, const DigitalSurface& 
     return level;
 }
 
+/// A guess of the faces that get max_radius (a part thick on both sides), from the distance maps
+/// alone: the voxels `depth` away along the face's axis, on either side, have the face's label of
+/// that side and a distance to the other labels of at least depth/2 (a smooth thick surface is
+/// within 55° of its axis). It decides which balls are summed together, not any normal.
+std::vector<std::uint8_t> likely_thick(const VoxelLabels& volume, const DigitalSurface& surface, const ReachMaps& maps,
+                                       double depth) {
+    const std::int64_t m = surface.face_count();
+    std::vector<std::uint8_t> thick(static_cast<std::size_t>(m), 0);
+#pragma omp parallel for schedule(static)
+    for (std::int64_t f = 0; f < m; ++f) {
+        const Surfel& s = surface.surfels[std::size_t(f)];
+        const FaceLabels labels = surface.face_labels.empty() ? FaceLabels{1, 0} : surface.face_labels[std::size_t(f)];
+        const std::int64_t steps = std::int64_t(std::ceil(depth / volume.grid().spacing[s.axis]));
+        const auto deep_enough = [&](std::int64_t offset, std::uint32_t label) {
+            Index3 y{s.voxel[0] + maps.padding, s.voxel[1] + maps.padding, s.voxel[2] + maps.padding};
+            y[std::size_t(s.axis)] += offset;
+            if (!maps.grid.contains(y[0], y[1], y[2])) return false;
+            const std::uint32_t here = volume.at(y[0] - maps.padding, y[1] - maps.padding, y[2] - maps.padding);
+            return here == label && maps.at(y[0], y[1], y[2]) >= 0.5 * depth;
+        };
+        thick[std::size_t(f)] = deep_enough(-s.sign * steps, labels.inner) && deep_enough(s.sign * (steps + 1), labels.outer);
+    }
+    return thick;
+}
+
 /// Steps of averaging each normal of `smooth` with its four edge-adjacent faces, a neighbour g
 /// weighing max(0, u_f·u_g)^power (so that the field is not averaged across a sharp edge, nor
 /// across the rim of a plate).
@@ -163,30 +205,44 @@ AdaptiveNormalField adaptive_integral_invariant_normals(const VoxelLabels& volum
     const int half_octave = o.levels_per_octave / 2;  // r/√2 is this many levels down (exactly for even counts)
     const int last = levels.count() - 1;
 
-    // The first field, at the narrow radius of the thick parts: the reach rays follow it, and it
-    // is n(r/√2) wherever the reach allows r = max_radius.
-    const int pilot_level = std::min(half_octave, last);
-    const PointMatrix pilot = normals_at_levels(volume, rows, surface, levels,
-                                                std::vector<int>(static_cast<std::size_t>(m), pilot_level), o.kernel);
     AdaptiveNormalField field;
     field.reach_cap = std::max(o.reach_cap, o.max_radius / o.reach_factor + volume.grid().spacing.maxCoeff());
     auto kept = std::make_shared<const ReachMaps>(reach_maps(volume, std::max(field.reach_cap, 0.5 * o.max_radius)));
     const ReachMaps& maps = *kept;
+    // The first field, at the narrow radius of the thick parts: the reach rays follow it, and it
+    // is n(r/√2) wherever the reach allows r = max_radius. Where that is likely, the field at
+    // max_radius comes with it from the same pass over the rows.
+    const int pilot_level = std::min(half_octave, last);
+    const std::vector<std::uint8_t> thick = likely_thick(volume, surface, maps, o.max_radius / o.reach_factor);
+    std::vector<int> wide_first(static_cast<std::size_t>(m), -1);
+    for (std::int64_t f = 0; f < m; ++f)
+        if (thick[std::size_t(f)] && pilot_level > 0) wide_first[std::size_t(f)] = 0;
+    PointMatrix pilot(m, 3), normals(m, 3);
+    normals_at_levels(volume, rows, surface, levels, wide_first, std::vector<int>(static_cast<std::size_t>(m), pilot_level),
+                      o.kernel, normals, pilot);
     const SurfelReach raw = surfel_reach(volume, surface, pilot, maps);
     field.reach.inner = max_over_rings(surface, raw.inner, o.reach_rings);
     field.reach.outer = max_over_rings(surface, raw.outer, o.reach_rings);
     const std::vector<int> level = radius_levels(volume, surface, maps, raw, field.reach, levels, o);
-    // Faces at the pilot's level have their normal already (the same ball, the same sums).
-    std::vector<int> to_compute = level;
-    for (int& l : to_compute)
-        if (l == pilot_level) l = -1;
-    field.normals = normals_at_levels(volume, rows, surface, levels, to_compute, o.kernel);
-    for (std::int64_t f = 0; f < m; ++f)
-        if (level[std::size_t(f)] == pilot_level) field.normals.row(f) = pilot.row(f);
     field.radius.resize(m);
     for (std::int64_t f = 0; f < m; ++f) field.radius[f] = levels.radius(level[std::size_t(f)]);
+    // The faces at another level: their field, and with it the narrow field their extrapolation
+    // needs (the pilot's where that is its level).
+    std::vector<int> to_compute(static_cast<std::size_t>(m), -1), narrow_to_compute(static_cast<std::size_t>(m), -1);
+    for (std::int64_t f = 0; f < m; ++f) {
+        const int l = level[std::size_t(f)];
+        if (l == pilot_level) normals.row(f) = pilot.row(f);
+        else if (wide_first[std::size_t(f)] != l) to_compute[std::size_t(f)] = l;
+        const int narrow = o.extrapolate ? narrow_level(levels, l, field.radius[f], o) : -1;
+        if (narrow >= 0 && narrow != pilot_level) narrow_to_compute[std::size_t(f)] = narrow;
+    }
+    PointMatrix narrow = PointMatrix::Zero(m, 3);
+    normals_at_levels(volume, rows, surface, levels, to_compute, narrow_to_compute, o.kernel, normals, narrow);
+    for (std::int64_t f = 0; f < m; ++f)
+        if (narrow_to_compute[std::size_t(f)] < 0) narrow.row(f) = pilot.row(f);  // where used, the pilot's level
+    field.normals = std::move(normals);
     field.extrapolated = Eigen::VectorXd::Zero(m);
-    if (o.extrapolate) extrapolate_field(volume, rows, surface, levels, level, pilot, pilot_level, o, field);
+    if (o.extrapolate) extrapolate_field(surface, levels, level, narrow, o, field);
     if (o.smoothing_steps > 0) {
         std::vector<std::uint8_t> smooth(static_cast<std::size_t>(m));
         for (std::int64_t f = 0; f < m; ++f) smooth[std::size_t(f)] = field.radius[f] < o.smoothing_below ? 1 : 0;
