@@ -46,7 +46,8 @@ struct PaddedDistanceMap {
         return distance[std::size_t(grid.linear_index(i, j, k))];
     }
 };
-PaddedDistanceMap padded_distance_transform(const BinaryVolume& volume, DistanceTarget target, std::int64_t padding,
+/// The object is every voxel of a non-zero label (a BinaryVolume's object, a label map's labels).
+PaddedDistanceMap padded_distance_transform(const VoxelLabels& volume, DistanceTarget target, std::int64_t padding,
                                             double cap = std::numeric_limits<double>::infinity());
 
 }  // namespace dsreg

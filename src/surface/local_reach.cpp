@@ -159,11 +159,8 @@ ReachMaps reach_maps(const VoxelLabels& volume, double cap) {
     {
         // The background (label 0, the padding included): D to the nearest labelled voxel; on a
         // binary volume, whose one label is the object, its voxels' D to the background too.
-        BinaryVolume labelled{grid, std::vector<std::uint8_t>(std::size_t(grid.voxel_count()))};
-#pragma omp parallel for schedule(static)
-        for (std::int64_t v = 0; v < grid.voxel_count(); ++v) labelled.mask[std::size_t(v)] = volume.at_linear(v) != 0;
         const DistanceTarget target = volume.is_binary() ? DistanceTarget::other_kind : DistanceTarget::object;
-        const PaddedDistanceMap map = padded_distance_transform(labelled, target, maps.padding, saturation);
+        const PaddedDistanceMap map = padded_distance_transform(volume, target, maps.padding, saturation);
         maps.grid = map.grid;
         maps.distance.resize(map.distance.size());
         const auto voxels = static_cast<std::int64_t>(map.distance.size());

@@ -173,15 +173,15 @@ std::vector<float> euclidean_distance_transform(const BinaryVolume& volume, Dist
     return padded_distance_transform(volume, target, 0, cap).distance;
 }
 
-PaddedDistanceMap padded_distance_transform(const BinaryVolume& volume, DistanceTarget target, std::int64_t padding,
+PaddedDistanceMap padded_distance_transform(const VoxelLabels& volume, DistanceTarget target, std::int64_t padding,
                                             double cap) {
     if (padding < 0) throw Error("padded_distance_transform: the padding must not be negative");
     if (!(cap > 0)) throw Error("padded_distance_transform: the cap must be positive");
     PaddedDistanceMap map;
     map.padding = padding;
-    map.grid = volume.grid;
+    map.grid = volume.grid();
     for (int a = 0; a < 3; ++a) map.grid.dims[std::size_t(a)] += 2 * padding;
-    map.grid.origin -= double(padding) * volume.grid.spacing;
+    map.grid.origin -= double(padding) * volume.grid().spacing;
     // Squared distances in place (float: exact for integer squared distances below 2^24),
     // square roots at the end. The padding is background.
     // Capping commutes with every pass (min(cap², f) enveloped is min(cap², envelope of f)), so
@@ -198,13 +198,13 @@ PaddedDistanceMap padded_distance_transform(const BinaryVolume& volume, Distance
         return other;
     };
     map.distance.assign(std::size_t(map.grid.voxel_count()), initial(false));
-    const Index3& d = volume.grid.dims;
+    const Index3& d = volume.grid().dims;
 #pragma omp parallel for schedule(static)
     for (std::int64_t k = 0; k < d[2]; ++k)
         for (std::int64_t j = 0; j < d[1]; ++j) {
-            const std::uint8_t* mask = volume.mask.data() + volume.grid.linear_index(0, j, k);
+            const std::int64_t first = volume.grid().linear_index(0, j, k);
             float* row = map.distance.data() + map.grid.linear_index(padding, j + padding, k + padding);
-            for (std::int64_t i = 0; i < d[0]; ++i) row[i] = initial(mask[i] != 0);
+            for (std::int64_t i = 0; i < d[0]; ++i) row[i] = initial(volume.at_linear(first + i) != 0);
         }
     for (int axis = 0; axis < 3; ++axis) pass_along(map.distance, map.grid, axis, target, limit, axis == 0);
     const auto voxels = static_cast<std::int64_t>(map.distance.size());
