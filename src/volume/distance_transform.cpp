@@ -107,13 +107,16 @@ constexpr std::int64_t kLinesPerTile = 16;
 /// A voxel's own value is never 0 (the other kind is a voxel away at least), so the sign survives.
 void two_sided_envelope(double* line, double* to_background, double* to_object, std::int64_t n, double w, double limit,
                         std::vector<double>& site, std::vector<double>& value, std::vector<double>& boundary) {
+    bool objects = false, backgrounds = false;
     for (std::int64_t p = 0; p < n; ++p) {
         const bool object = std::signbit(line[p]);
         to_background[p] = object ? -line[p] : 0.0;
         to_object[p] = object ? 0.0 : line[p];
+        (object ? objects : backgrounds) = true;
     }
-    lower_envelope(to_background, to_background, n, w, true, limit, site, value, boundary);
-    lower_envelope(to_object, to_object, n, w, false, limit, site, value, boundary);
+    // A line of one kind keeps the zeros of the other kind's transform.
+    if (objects) lower_envelope(to_background, to_background, n, w, true, limit, site, value, boundary);
+    if (backgrounds) lower_envelope(to_object, to_object, n, w, false, limit, site, value, boundary);
     for (std::int64_t p = 0; p < n; ++p) line[p] = std::signbit(line[p]) ? -to_background[p] : to_object[p];
 }
 
