@@ -229,7 +229,7 @@ inline void add_row(const StencilRow& row, const RowSums& sum, LatticeMoments& m
 /// The runs of grid row (j0 + row.dj, k0 + row.dk) as indices [first, last) into rows.runs, or
 /// false if the row is outside the grid.
 inline bool row_runs(const Index3& d, const RowRuns& rows, std::int64_t j0, std::int64_t k0, const StencilRow& row,
-              std::int64_t& first, std::int64_t& last) {
+                     std::int64_t& first, std::int64_t& last) {
     const std::int64_t j = j0 + row.dj, k = k0 + row.dk;
     if (j < 0 || k < 0 || j >= d[1] || k >= d[2]) return false;
     const std::int64_t id = j + d[1] * k;
