@@ -53,16 +53,26 @@ using surface_detail::UnionFind;
 
 /// The label of a voxel, 0 outside the grid, for the two kinds of volumes: the extraction is
 /// written once against these (a binary volume is the label map {0, 1}).
+/// row(j, k): the voxels of row (j, k) from x = 0, or nullptr outside the grid; label_of(value)
+/// the label of one of them.
 struct MaskLabels {
     const BinaryVolume& volume;
     const VoxelGrid& grid() const { return volume.grid; }
     std::uint32_t operator()(const std::int64_t v[3]) const { return volume.inside(v[0], v[1], v[2]) ? 1u : 0u; }
+    const std::uint8_t* row(std::int64_t j, std::int64_t k) const {
+        return volume.grid.contains(0, j, k) ? volume.mask.data() + volume.grid.linear_index(0, j, k) : nullptr;
+    }
+    static std::uint32_t label_of(std::uint8_t value) { return value != 0 ? 1u : 0u; }
 };
 
 struct IndexLabels {
     const LabelVolume& volume;
     const VoxelGrid& grid() const { return volume.grid; }
     std::uint32_t operator()(const std::int64_t v[3]) const { return volume.label(v[0], v[1], v[2]); }
+    const std::uint32_t* row(std::int64_t j, std::int64_t k) const {
+        return volume.grid.contains(0, j, k) ? volume.labels.data() + volume.grid.linear_index(0, j, k) : nullptr;
+    }
+    static std::uint32_t label_of(std::uint32_t value) { return value; }
 };
 
 /// The in-plane axis direction that crosses edge e (corner e → corner e+1) of surfel s,
@@ -99,22 +109,27 @@ SurfelIndex enumerate_surfels(const Labels& label) {
     for (std::int64_t k = 0; k < nz; ++k) {
         std::vector<Surfel>& out = per_slice[static_cast<std::size_t>(k)];
         std::vector<FaceLabels>& out_labels = per_slice_labels[static_cast<std::size_t>(k)];
-        for (std::int64_t j = 0; j < ny; ++j)
+        for (std::int64_t j = 0; j < ny; ++j) {
+            // The row and its four neighbour rows (nullptr beyond the grid: background).
+            const auto* here = label.row(j, k);
+            const decltype(here) across[2][2] = {{label.row(j - 1, k), label.row(j + 1, k)},
+                                                 {label.row(j, k - 1), label.row(j, k + 1)}};
+            const auto at = [&](const decltype(here) row, std::int64_t i) {
+                return row && i >= 0 && i < nx ? Labels::label_of(row[i]) : 0u;
+            };
             for (std::int64_t i = 0; i < nx; ++i) {
-                const std::int64_t v[3] = {i, j, k};
-                const std::uint32_t inner = label(v);
+                const std::uint32_t inner = Labels::label_of(here[i]);
                 if (inner == 0) continue;
                 for (int axis = 0; axis < 3; ++axis)
                     for (int sign : {-1, 1}) {
-                        std::int64_t w[3] = {v[0], v[1], v[2]};
-                        w[axis] += sign;
-                        const std::uint32_t outer = label(w);
+                        const std::uint32_t outer = axis == 0 ? at(here, i + sign) : at(across[axis - 1][sign > 0], i);
                         if (outer >= inner) continue;
                         out.push_back(Surfel{{std::int32_t(i), std::int32_t(j), std::int32_t(k)},
                                              std::int8_t(axis), std::int8_t(sign)});
                         out_labels.push_back(FaceLabels{inner, outer});
                     }
             }
+        }
     }
     SurfelIndex index;
     std::size_t total = 0;
