@@ -238,6 +238,20 @@ inline bool row_runs(const Index3& d, const RowRuns& rows, std::int64_t j0, std:
     return true;
 }
 
+/// Calls add(lo, hi) with the x offsets from i0 of each run of `label` among runs [first, last)
+/// of a row that may meet the stencil row's range (runs in x order: the scan stops at the first
+/// run beyond t_hi).
+template <class Add>
+inline void for_each_run(const RowRuns& rows, std::int64_t first, std::int64_t last, std::int64_t i0,
+                         std::int32_t t_hi, std::uint32_t label, Add&& add) {
+    for (std::int64_t q = first; q < last; ++q) {
+        const auto& run = rows.runs[std::size_t(q)];
+        if (run[0] - i0 > t_hi) break;
+        if (rows.labels[std::size_t(q)] != label) continue;
+        add(run[0] - i0, run[1] - i0);
+    }
+}
+
 /// The moments of the voxels of `label` in the ball of surfel s.
 LatticeMoments ball_moments(const Index3& d, const RowRuns& rows, const Surfel& s, std::uint32_t label,
                             const Stencil& stencil) {
@@ -248,12 +262,8 @@ LatticeMoments ball_moments(const Index3& d, const RowRuns& rows, const Surfel& 
         if (!row_runs(d, rows, s.voxel[1], s.voxel[2], row, first, last)) continue;
         const RowSums* prefix = stencil.prefix_sums.data() + row.prefix;
         RowSums sum;
-        for (std::int64_t q = first; q < last; ++q) {
-            const auto& run = rows.runs[std::size_t(q)];
-            if (run[0] - i0 > row.t_hi) break;  // runs in x order: the rest lie beyond the ball
-            if (rows.labels[std::size_t(q)] != label) continue;
-            add_run(row, prefix, run[0] - i0, run[1] - i0, sum);
-        }
+        for_each_run(rows, first, last, i0, row.t_hi, label,
+                     [&](std::int64_t lo, std::int64_t hi) { add_run(row, prefix, lo, hi, sum); });
         add_row(row, sum, m);
     }
     return m;
@@ -276,25 +286,18 @@ std::pair<LatticeMoments, LatticeMoments> nested_ball_moments(const Index3& d, c
         const std::int32_t r_inner = inner_row_of[r];
         RowSums sum;
         if (r_inner < 0) {
-            for (std::int64_t q = first; q < last; ++q) {
-                const auto& run = rows.runs[std::size_t(q)];
-                if (run[0] - i0 > row.t_hi) break;
-                if (rows.labels[std::size_t(q)] != label) continue;
-                add_run(row, prefix, run[0] - i0, run[1] - i0, sum);
-            }
+            for_each_run(rows, first, last, i0, row.t_hi, label,
+                         [&](std::int64_t lo, std::int64_t hi) { add_run(row, prefix, lo, hi, sum); });
             add_row(row, sum, m_outer);
             continue;
         }
         const StencilRow& row_inner = inner.rows[std::size_t(r_inner)];
         const RowSums* prefix_inner = inner.prefix_sums.data() + row_inner.prefix;
         RowSums sum_inner;
-        for (std::int64_t q = first; q < last; ++q) {
-            const auto& run = rows.runs[std::size_t(q)];
-            if (run[0] - i0 > row.t_hi) break;
-            if (rows.labels[std::size_t(q)] != label) continue;
-            add_run(row, prefix, run[0] - i0, run[1] - i0, sum);
-            add_run(row_inner, prefix_inner, run[0] - i0, run[1] - i0, sum_inner);
-        }
+        for_each_run(rows, first, last, i0, row.t_hi, label, [&](std::int64_t lo, std::int64_t hi) {
+            add_run(row, prefix, lo, hi, sum);
+            add_run(row_inner, prefix_inner, lo, hi, sum_inner);
+        });
         add_row(row, sum, m_outer);
         add_row(row_inner, sum_inner, m_inner);
     }
@@ -384,7 +387,7 @@ IntegralInvariantBall::IntegralInvariantBall(const Eigen::Vector3d& spacing, dou
 
 Eigen::Vector3d IntegralInvariantBall::normal(const Index3& dims, const RowRuns& rows, const Surfel& s,
                                               std::uint32_t label) const {
-    const LatticeMoments m = ball_moments(dims, rows, s, label, stencils_[s.axis][s.sign > 0 ? 1 : 0]);
+    const LatticeMoments m = ball_moments(dims, rows, s, label, stencil(s));
     return normal_from_moments(m, s, spacing_);
 }
 
