@@ -286,48 +286,48 @@ TEST(InsideTest, DigitalSurfaceClassifiesItsOwnVoxels) {
     }
 }
 
-TEST(InsideTest, UpdatingTheRowsOfMovedTrianglesGivesTheWholeClassification) {
-    // A ball's digital surface with a patch of vertices pushed in by up to 1.5 voxels: the
-    // rows the moved triangles cover, before or after, classified again, give what classifying
-    // the whole grid at the new positions gives; rows left out keep their old values.
+TEST(InsideTest, UpdatingTheMovedTrianglesGivesTheWholeClassification) {
+    // A ball's digital surface with a patch of vertices pushed in by up to 1.5 voxels, in two
+    // steps: after each, updating the triangles that moved or were split again gives what
+    // classifying the whole grid at the new positions gives, and every voxel that changed lies
+    // on a row the update reports.
     const BinaryVolume volume = test::make_ball(16, 5.5, 7.5);
     const DigitalSurface surface = extract_digital_surface(volume, Connectivity::TwentySix);
-    const FaceMatrix before = mesh_triangles(surface.vertices, surface.quads);
-    std::vector<std::uint8_t> inside = voxel_centres_inside(surface.vertices, before, volume.grid);
-    const std::vector<std::uint8_t> original = inside;
-    PointMatrix moved = surface.vertices;
+    PointMatrix at = surface.vertices;
+    FaceMatrix triangles = mesh_triangles(at, surface.quads);
+    VoxelCentresInside tracked(at, triangles, volume.grid);
+    ASSERT_EQ(tracked.inside(), voxel_centres_inside(at, triangles, volume.grid));
+    EXPECT_TRUE(tracked.update(at, triangles, {}).empty());
     std::mt19937 random(3);
-    std::uniform_real_distribution<double> depth(0.0, 1.5);
+    std::uniform_real_distribution<double> depth(0.0, 0.75);
     const Eigen::RowVector3d centre(7.5, 7.5, 7.5);
-    for (Eigen::Index v = 0; v < moved.rows(); ++v)
-        if (moved(v, 2) > 10) moved.row(v) -= depth(random) * (moved.row(v) - centre).normalized();
-    const FaceMatrix after = mesh_triangles(moved, surface.quads);
-    const std::int64_t ny = volume.grid.dims[1];
-    std::vector<char> rows(std::size_t(ny * volume.grid.dims[2]), 0);
-    std::vector<char> none = rows;
-    const auto mark = [&](const PointMatrix& at, const FaceMatrix& triangles) {
-        for (Eigen::Index t = 0; t < triangles.rows(); ++t) {
-            bool touched = false;
-            for (int k = 0; k < 3; ++k) touched = touched || at.row(triangles(t, k)) != surface.vertices.row(triangles(t, k)) ||
-                                                  moved.row(triangles(t, k)) != surface.vertices.row(triangles(t, k));
-            if (!touched) continue;
-            for (int k = 0; k < 3; ++k) {
-                const std::int64_t j = std::llround(at(triangles(t, k), 1)), z = std::llround(at(triangles(t, k), 2));
-                for (std::int64_t c = std::max<std::int64_t>(z - 2, 0); c <= std::min<std::int64_t>(z + 2, volume.grid.dims[2] - 1); ++c)
-                    for (std::int64_t b = std::max<std::int64_t>(j - 2, 0); b <= std::min<std::int64_t>(j + 2, ny - 1); ++b)
-                        rows[std::size_t(b + ny * c)] = 1;
-            }
+    const std::int64_t nx = volume.grid.dims[0];
+    for (int step = 0; step < 2; ++step) {
+        const std::vector<std::uint8_t> before = tracked.inside();
+        PointMatrix moved = at;
+        for (Eigen::Index v = 0; v < moved.rows(); ++v)
+            if (moved(v, 2) > 10) moved.row(v) -= depth(random) * (moved.row(v) - centre).normalized();
+        const FaceMatrix after = mesh_triangles(moved, surface.quads);
+        std::vector<std::int32_t> changed;
+        for (Eigen::Index t = 0; t < after.rows(); ++t) {
+            bool touched = after.row(t) != triangles.row(t);
+            for (int k = 0; k < 3; ++k)
+                touched = touched || moved.row(after(t, k)) != at.row(after(t, k)) ||
+                          moved.row(triangles(t, k)) != at.row(triangles(t, k));
+            if (touched) changed.push_back(std::int32_t(t));
         }
-    };
-    mark(surface.vertices, before);
-    mark(moved, after);
-    update_voxel_centres_inside(moved, after, volume.grid, none, inside);
-    EXPECT_EQ(inside, original);
-    update_voxel_centres_inside(moved, after, volume.grid, rows, inside);
-    const std::vector<std::uint8_t> whole = voxel_centres_inside(moved, after, volume.grid);
-    EXPECT_EQ(inside, whole);
-    EXPECT_NE(whole, original);  // the push took some object centres out
-    EXPECT_THROW(update_voxel_centres_inside(moved, after, volume.grid, std::vector<char>(3, 1), inside), Error);
+        ASSERT_FALSE(changed.empty());
+        at = moved, triangles = after;
+        const std::vector<std::int64_t> rows = tracked.update(at, triangles, changed);
+        const std::vector<std::uint8_t> whole = voxel_centres_inside(at, triangles, volume.grid);
+        EXPECT_EQ(tracked.inside(), whole) << "step " << step;
+        EXPECT_NE(whole, before) << "step " << step;  // the push took some object centres out
+        EXPECT_TRUE(std::is_sorted(rows.begin(), rows.end()));
+        for (std::size_t v = 0; v < whole.size(); ++v)
+            if (whole[v] != before[v]) EXPECT_TRUE(std::binary_search(rows.begin(), rows.end(), std::int64_t(v) / nx)) << v;
+    }
+    EXPECT_THROW(tracked.update(at, triangles.topRows(3), {0}), Error);
+    EXPECT_THROW(tracked.update(at, triangles, {std::int32_t(triangles.rows())}), Error);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -20,6 +20,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "dsreg/digital_surface.hpp"
@@ -96,17 +97,42 @@ std::vector<double> triangle_min_angles(const PointMatrix& vertices, const FaceM
 std::vector<std::uint8_t> voxel_centres_inside(const PointMatrix& vertices, const FaceMatrix& triangles,
                                                const VoxelGrid& grid);
 
-/// The same on the voxel rows (j, k) flagged in `rows` (index j + ny·k) only: those rows of
-/// `inside` are computed again, the others kept (after a move of some vertices, the rows that
-/// their triangles' y-z bounding boxes covered before or cover now). Throws dsreg::Error for
-/// sizes that do not match the grid.
-void update_voxel_centres_inside(const PointMatrix& vertices, const FaceMatrix& triangles, const VoxelGrid& grid,
-                                 const std::vector<char>& rows, std::vector<std::uint8_t>& inside);
+/// voxel_centres_inside kept up to date while vertices move (the repair's voxel sides): the
+/// triangles stay bucketed by the voxel rows (j, k) their y-z bounding boxes cover, so an update
+/// moves only the triangles it is given between buckets and classifies again only the rows they
+/// covered before or cover now. Every classification equals voxel_centres_inside's at the same
+/// positions.
+class VoxelCentresInside {
+public:
+    /// Classifies every voxel centre of `grid` against the closed mesh. Throws dsreg::Error for a
+    /// vertex index out of range.
+    VoxelCentresInside(const PointMatrix& vertices, const FaceMatrix& triangles, const VoxelGrid& grid);
 
-/// Flags in `rows` (index j + ny·k, ny·nz flags) the voxel rows whose ray may cross triangle t:
-/// those that voxel_centres_inside tests it against.
-void flag_rows_of_triangle(const PointMatrix& vertices, const FaceMatrix& triangles, Eigen::Index t, const VoxelGrid& grid,
-                           std::vector<char>& rows);
+    /// The triangles `changed` (row indices of `triangles`) may have new vertices or new
+    /// positions in `vertices`; every other triangle is as at the last call (same vertices, not
+    /// moved). Returns the rows classified again, index j + ny·k, increasing. Throws dsreg::Error
+    /// for a triangle count other than the constructor's or an index out of range.
+    std::vector<std::int64_t> update(const PointMatrix& vertices, const FaceMatrix& triangles,
+                                     const std::vector<std::int32_t>& changed);
+
+    /// 1 where the voxel centre is inside, indexed like the grid's voxels.
+    const std::vector<std::uint8_t>& inside() const { return inside_; }
+    std::vector<std::uint8_t> take_inside() { return std::move(inside_); }
+
+private:
+    struct RowBox {  ///< rows j0..j1 × k0..k1 (empty if j1 < j0 or k1 < k0)
+        std::int32_t j0, j1, k0, k1;
+    };
+    RowBox rows_of(const PointMatrix& vertices, const FaceMatrix& triangles, Eigen::Index t) const;
+    template <class Visit>
+    void for_each_row(const RowBox& box, Visit visit) const;
+    void classify(const PointMatrix& vertices, const FaceMatrix& triangles, const std::vector<std::int64_t>& rows);
+
+    VoxelGrid grid_;
+    std::vector<std::vector<std::int32_t>> row_triangles_;  ///< per row j + ny·k: the triangles that may cross its ray
+    std::vector<RowBox> triangle_rows_;                     ///< per triangle: the rows listing it
+    std::vector<std::uint8_t> inside_;
+};
 
 // ---------------------------------------------------------------------------------------------
 // Ground truth of an implicit shape

@@ -2,6 +2,7 @@
 // +x, one sorted list of crossings per voxel row.
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "dsreg/error.hpp"
 #include "dsreg/evaluation.hpp"
@@ -56,12 +57,6 @@ bool ray_crossing(const PointMatrix& v, const FaceMatrix& triangles, Eigen::Inde
     return true;
 }
 
-/// Triangles listed per voxel row (j, k) of the grid, row index j + ny·k, in compressed form.
-struct RowBuckets {
-    std::vector<std::int64_t> offsets;
-    std::vector<std::int32_t> triangles;
-};
-
 /// Range of row indices whose coordinate origin + spacing·index lies in [low, high], widened by
 /// one row on each side against rounding (the exact test decides).
 std::pair<std::int64_t, std::int64_t> row_range(double low, double high, double origin, double spacing,
@@ -73,43 +68,6 @@ std::pair<std::int64_t, std::int64_t> row_range(double low, double high, double 
     return {lo, hi};
 }
 
-/// Calls visit(j + ny·k) for each voxel row (j, k) whose ray may cross triangle t.
-template <class Visit>
-void for_each_row_of_triangle(const PointMatrix& v, const FaceMatrix& triangles, Eigen::Index t, const VoxelGrid& grid,
-                              Visit visit) {
-    const std::int64_t ny = grid.dims[1], nz = grid.dims[2];
-    double y0 = v(triangles(t, 0), 1), y1 = y0, z0 = v(triangles(t, 0), 2), z1 = z0;
-    for (int k = 1; k < 3; ++k) {
-        y0 = std::min(y0, v(triangles(t, k), 1)), y1 = std::max(y1, v(triangles(t, k), 1));
-        z0 = std::min(z0, v(triangles(t, k), 2)), z1 = std::max(z1, v(triangles(t, k), 2));
-    }
-    const auto [j0, j1] = row_range(y0, y1, grid.origin.y(), grid.spacing.y(), ny);
-    const auto [k0, k1] = row_range(z0, z1, grid.origin.z(), grid.spacing.z(), nz);
-    for (std::int64_t k = k0; k <= k1; ++k)
-        for (std::int64_t j = j0; j <= j1; ++j) visit(j + ny * k);
-}
-
-/// The triangles bucketed by row; with `rows` (one flag per row j + ny·k), only those rows.
-RowBuckets bucket_triangles_by_row(const PointMatrix& v, const FaceMatrix& triangles, const VoxelGrid& grid,
-                                   const std::vector<char>* rows = nullptr) {
-    const std::int64_t ny = grid.dims[1], nz = grid.dims[2];
-    RowBuckets buckets;
-    buckets.offsets.assign(std::size_t(ny * nz + 1), 0);
-    auto for_each_row = [&](Eigen::Index t, auto&& visit) {
-        for_each_row_of_triangle(v, triangles, t, grid, [&](std::int64_t row) {
-            if (!rows || (*rows)[std::size_t(row)]) visit(row);
-        });
-    };
-    for (Eigen::Index t = 0; t < triangles.rows(); ++t)
-        for_each_row(t, [&](std::int64_t row) { buckets.offsets[std::size_t(row + 1)] += 1; });
-    for (std::size_t r = 1; r < buckets.offsets.size(); ++r) buckets.offsets[r] += buckets.offsets[r - 1];
-    buckets.triangles.resize(std::size_t(buckets.offsets.back()));
-    std::vector<std::int64_t> next(buckets.offsets.begin(), buckets.offsets.end() - 1);
-    for (Eigen::Index t = 0; t < triangles.rows(); ++t)
-        for_each_row(t, [&](std::int64_t row) { buckets.triangles[std::size_t(next[std::size_t(row)]++)] = std::int32_t(t); });
-    return buckets;
-}
-
 void check_triangles(const PointMatrix& vertices, const FaceMatrix& triangles, const char* caller) {
     if (triangles.rows() > 0 && triangles.cols() != 3) throw Error(std::string(caller) + ": the faces must be triangles");
     for (Eigen::Index t = 0; t < triangles.rows(); ++t)
@@ -118,75 +76,139 @@ void check_triangles(const PointMatrix& vertices, const FaceMatrix& triangles, c
                 throw Error(std::string(caller) + ": triangle " + std::to_string(t) + " has a vertex index out of range");
 }
 
-/// Classifies the voxel centres of the rows (all of them, or those flagged in `rows`) into
-/// `inside` (the grid's size; each row done is written whole).
-void classify_rows(const PointMatrix& vertices, const FaceMatrix& triangles, const VoxelGrid& grid,
-                   const std::vector<char>* rows, std::vector<std::uint8_t>& inside) {
-    const std::int64_t nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
-    const RowBuckets buckets = bucket_triangles_by_row(vertices, triangles, grid, rows);
-
-#pragma omp parallel
-    {
-        std::vector<double> crossings;
-#pragma omp for schedule(dynamic, 16)
-        for (std::int64_t k = 0; k < nz; ++k) {
-            for (std::int64_t j = 0; j < ny; ++j) {
-                const std::int64_t row = j + ny * k;
-                if (rows && !(*rows)[std::size_t(row)]) continue;
-                std::uint8_t* row_inside = inside.data() + grid.linear_index(0, j, k);
-                std::fill(row_inside, row_inside + nx, std::uint8_t(0));
-                const Eigen::Vector3d start = grid.voxel_center(0, j, k);
-                const Point2 ray{start.y(), start.z()};
-                crossings.clear();
-                for (std::int64_t e = buckets.offsets[std::size_t(row)]; e < buckets.offsets[std::size_t(row + 1)]; ++e) {
-                    double x;
-                    if (ray_crossing(vertices, triangles, buckets.triangles[std::size_t(e)], ray, x)) crossings.push_back(x);
-                }
-                if (crossings.empty()) continue;
-                std::sort(crossings.begin(), crossings.end());
-                // Voxel i is inside iff an odd number of crossings lie beyond x_i: the voxels
-                // between crossings p − 1 and p (x_{p−1} ≤ x_i < x_p) are inside iff m − p is odd.
-                const auto voxel_x = [&](std::int64_t i) { return start.x() + grid.spacing.x() * double(i); };
-                const auto first_at_or_beyond = [&](double c) {  // the first i with x_i ≥ c
-                    std::int64_t i = std::int64_t(std::clamp(std::ceil((c - start.x()) / grid.spacing.x()), 0.0, double(nx)));
-                    while (i > 0 && voxel_x(i - 1) >= c) --i;
-                    while (i < nx && voxel_x(i) < c) ++i;
-                    return i;
-                };
-                const std::size_t m = crossings.size();
-                std::int64_t from = 0;
-                for (std::size_t p = 0; p <= m; ++p) {
-                    const std::int64_t to = p < m ? first_at_or_beyond(crossings[p]) : nx;
-                    if ((m - p) % 2 == 1 && to > from) std::fill(row_inside + from, row_inside + to, std::uint8_t(1));
-                    from = std::max(from, to);
-                }
-            }
-        }
+/// Classifies the voxel centres of row (j, k) into `row_inside` (nx values) against the
+/// triangles [first, last) (those whose y-z box covers the row, in any order: the crossings are
+/// sorted). `crossings` is work space.
+void classify_row(const PointMatrix& vertices, const FaceMatrix& triangles, const VoxelGrid& grid, std::int64_t j,
+                  std::int64_t k, const std::int32_t* first, const std::int32_t* last, std::vector<double>& crossings,
+                  std::uint8_t* row_inside) {
+    const std::int64_t nx = grid.dims[0];
+    std::fill(row_inside, row_inside + nx, std::uint8_t(0));
+    const Eigen::Vector3d start = grid.voxel_center(0, j, k);
+    const Point2 ray{start.y(), start.z()};
+    crossings.clear();
+    for (const std::int32_t* t = first; t != last; ++t) {
+        double x;
+        if (ray_crossing(vertices, triangles, *t, ray, x)) crossings.push_back(x);
+    }
+    if (crossings.empty()) return;
+    std::sort(crossings.begin(), crossings.end());
+    // Voxel i is inside iff an odd number of crossings lie beyond x_i: the voxels between
+    // crossings p − 1 and p (x_{p−1} ≤ x_i < x_p) are inside iff m − p is odd.
+    const auto voxel_x = [&](std::int64_t i) { return start.x() + grid.spacing.x() * double(i); };
+    const auto first_at_or_beyond = [&](double c) {  // the first i with x_i ≥ c
+        std::int64_t i = std::int64_t(std::clamp(std::ceil((c - start.x()) / grid.spacing.x()), 0.0, double(nx)));
+        while (i > 0 && voxel_x(i - 1) >= c) --i;
+        while (i < nx && voxel_x(i) < c) ++i;
+        return i;
+    };
+    const std::size_t m = crossings.size();
+    std::int64_t from = 0;
+    for (std::size_t p = 0; p <= m; ++p) {
+        const std::int64_t to = p < m ? first_at_or_beyond(crossings[p]) : nx;
+        if ((m - p) % 2 == 1 && to > from) std::fill(row_inside + from, row_inside + to, std::uint8_t(1));
+        from = std::max(from, to);
     }
 }
 
 }  // namespace
 
+VoxelCentresInside::VoxelCentresInside(const PointMatrix& vertices, const FaceMatrix& triangles, const VoxelGrid& grid)
+    : grid_(grid), row_triangles_(std::size_t(grid.dims[1] * grid.dims[2])),
+      triangle_rows_(std::size_t(triangles.rows())), inside_(std::size_t(grid.voxel_count()), 0) {
+    check_triangles(vertices, triangles, "voxel_centres_inside");
+    for (Eigen::Index t = 0; t < triangles.rows(); ++t) {
+        triangle_rows_[std::size_t(t)] = rows_of(vertices, triangles, t);
+        for_each_row(triangle_rows_[std::size_t(t)], [&](std::int64_t row) { row_triangles_[std::size_t(row)].push_back(std::int32_t(t)); });
+    }
+    std::vector<std::int64_t> all_rows;
+    all_rows.reserve(row_triangles_.size());
+    for (std::size_t row = 0; row < row_triangles_.size(); ++row)
+        if (!row_triangles_[row].empty()) all_rows.push_back(std::int64_t(row));
+    classify(vertices, triangles, all_rows);
+}
+
+std::vector<std::int64_t> VoxelCentresInside::update(const PointMatrix& vertices, const FaceMatrix& triangles,
+                                                     const std::vector<std::int32_t>& changed) {
+    if (std::size_t(triangles.rows()) != triangle_rows_.size())
+        throw Error("VoxelCentresInside::update: " + std::to_string(triangles.rows()) + " triangles, " +
+                    std::to_string(triangle_rows_.size()) + " expected");
+    for (const std::int32_t t : changed) {
+        if (t < 0 || t >= triangles.rows())
+            throw Error("VoxelCentresInside::update: triangle " + std::to_string(t) + " out of range");
+        for (int k = 0; k < 3; ++k)
+            if (triangles(t, k) < 0 || triangles(t, k) >= vertices.rows())
+                throw Error("VoxelCentresInside::update: triangle " + std::to_string(t) + " has a vertex index out of range");
+    }
+    // The changed triangles leave the rows they were listed in (one pass over each such row),
+    // then join the rows of their new boxes.
+    std::vector<char> is_changed(triangle_rows_.size(), 0), flagged(row_triangles_.size(), 0);
+    std::vector<std::int64_t> rows;
+    const auto flag = [&](std::int64_t row) {
+        if (!flagged[std::size_t(row)]) flagged[std::size_t(row)] = 1, rows.push_back(row);
+    };
+    for (const std::int32_t t : changed) {
+        is_changed[std::size_t(t)] = 1;
+        for_each_row(triangle_rows_[std::size_t(t)], flag);
+    }
+    for (const std::int64_t row : rows) {
+        std::vector<std::int32_t>& listed = row_triangles_[std::size_t(row)];
+        listed.erase(std::remove_if(listed.begin(), listed.end(), [&](std::int32_t t) { return is_changed[std::size_t(t)] != 0; }),
+                     listed.end());
+    }
+    for (const std::int32_t t : changed) {
+        if (!is_changed[std::size_t(t)]) continue;  // listed twice in `changed`
+        is_changed[std::size_t(t)] = 0;
+        RowBox& box = triangle_rows_[std::size_t(t)];
+        box = rows_of(vertices, triangles, t);
+        for_each_row(box, [&](std::int64_t row) {
+            flag(row);
+            row_triangles_[std::size_t(row)].push_back(t);
+        });
+    }
+    std::sort(rows.begin(), rows.end());
+    classify(vertices, triangles, rows);
+    return rows;
+}
+
+VoxelCentresInside::RowBox VoxelCentresInside::rows_of(const PointMatrix& v, const FaceMatrix& triangles,
+                                                      Eigen::Index t) const {
+    double y0 = v(triangles(t, 0), 1), y1 = y0, z0 = v(triangles(t, 0), 2), z1 = z0;
+    for (int k = 1; k < 3; ++k) {
+        y0 = std::min(y0, v(triangles(t, k), 1)), y1 = std::max(y1, v(triangles(t, k), 1));
+        z0 = std::min(z0, v(triangles(t, k), 2)), z1 = std::max(z1, v(triangles(t, k), 2));
+    }
+    const auto [j0, j1] = row_range(y0, y1, grid_.origin.y(), grid_.spacing.y(), grid_.dims[1]);
+    const auto [k0, k1] = row_range(z0, z1, grid_.origin.z(), grid_.spacing.z(), grid_.dims[2]);
+    return RowBox{std::int32_t(j0), std::int32_t(j1), std::int32_t(k0), std::int32_t(k1)};
+}
+
+template <class Visit>
+void VoxelCentresInside::for_each_row(const RowBox& box, Visit visit) const {
+    const std::int64_t ny = grid_.dims[1];
+    for (std::int64_t k = box.k0; k <= box.k1; ++k)
+        for (std::int64_t j = box.j0; j <= box.j1; ++j) visit(j + ny * k);
+}
+
+void VoxelCentresInside::classify(const PointMatrix& vertices, const FaceMatrix& triangles,
+                                  const std::vector<std::int64_t>& rows) {
+    const std::int64_t ny = grid_.dims[1];
+#pragma omp parallel
+    {
+        std::vector<double> crossings;
+#pragma omp for schedule(dynamic, 16)
+        for (std::size_t r = 0; r < rows.size(); ++r) {
+            const std::int64_t row = rows[r], j = row % ny, k = row / ny;
+            const std::vector<std::int32_t>& listed = row_triangles_[std::size_t(row)];
+            classify_row(vertices, triangles, grid_, j, k, listed.data(), listed.data() + listed.size(), crossings,
+                         inside_.data() + grid_.linear_index(0, j, k));
+        }
+    }
+}
+
 std::vector<std::uint8_t> voxel_centres_inside(const PointMatrix& vertices, const FaceMatrix& triangles,
                                                const VoxelGrid& grid) {
-    check_triangles(vertices, triangles, "voxel_centres_inside");
-    std::vector<std::uint8_t> inside(std::size_t(grid.voxel_count()), 0);
-    if (triangles.rows() == 0 || grid.voxel_count() == 0) return inside;
-    classify_rows(vertices, triangles, grid, nullptr, inside);
-    return inside;
-}
-
-void flag_rows_of_triangle(const PointMatrix& vertices, const FaceMatrix& triangles, Eigen::Index t, const VoxelGrid& grid,
-                           std::vector<char>& rows) {
-    for_each_row_of_triangle(vertices, triangles, t, grid, [&](std::int64_t row) { rows[std::size_t(row)] = 1; });
-}
-
-void update_voxel_centres_inside(const PointMatrix& vertices, const FaceMatrix& triangles, const VoxelGrid& grid,
-                                 const std::vector<char>& rows, std::vector<std::uint8_t>& inside) {
-    check_triangles(vertices, triangles, "update_voxel_centres_inside");
-    if (std::int64_t(rows.size()) != grid.dims[1] * grid.dims[2] || std::int64_t(inside.size()) != grid.voxel_count())
-        throw Error("update_voxel_centres_inside: one flag per voxel row and one value per voxel expected");
-    classify_rows(vertices, triangles, grid, &rows, inside);
+    return VoxelCentresInside(vertices, triangles, grid).take_inside();
 }
 
 }  // namespace dsreg

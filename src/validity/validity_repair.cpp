@@ -89,8 +89,7 @@ public:
     VoxelSides(const BinaryVolume& volume, const DigitalSurface& surface, const PointMatrix& positions,
                const VertexCorners& corners)
         : volume_(volume), surface_(surface), positions_(positions),
-          triangles_(mesh_triangles(positions, surface.quads)),
-          inside_(voxel_centres_inside(positions, triangles_, volume.grid)),
+          triangles_(mesh_triangles(positions, surface.quads)), inside_(positions, triangles_, volume.grid),
           corners_(corners) {
         pointel_vertices_.reserve(std::size_t(surface.vertex_count()));
         for (std::int64_t v = 0; v < surface.vertex_count(); ++v)
@@ -98,6 +97,8 @@ public:
                                                surface.vertex_pointels(v, 2)),
                                            std::int32_t(v));
         std::sort(pointel_vertices_.begin(), pointel_vertices_.end());
+        for (std::size_t v = 0; v < volume.mask.size(); ++v)
+            if (is_wrong(v)) wrong_.push_back(std::int64_t(v));
     }
 
     /// The vertices in `moved` are now at their rows of `positions`.
@@ -107,30 +108,23 @@ public:
         for (const std::int32_t v : moved) corners_.for_each_face(v, [&](std::int32_t q) { quads.push_back(q); });
         std::sort(quads.begin(), quads.end());
         quads.erase(std::unique(quads.begin(), quads.end()), quads.end());
-        const VoxelGrid& grid = volume_.grid;
-        std::vector<char> rows(std::size_t(grid.dims[1] * grid.dims[2]), 0);
-        const auto mark_rows = [&](std::int64_t t) { flag_rows_of_triangle(positions_, triangles_, t, grid, rows); };
-        for (const std::int32_t q : quads) mark_rows(2 * std::int64_t(q)), mark_rows(2 * std::int64_t(q) + 1);
         for (const std::int32_t v : moved) positions_.row(v) = positions.row(v);
         FaceMatrix moved_quads(Eigen::Index(quads.size()), 4);
         for (std::size_t k = 0; k < quads.size(); ++k) moved_quads.row(Eigen::Index(k)) = surface_.quads.row(quads[k]);
         const FaceMatrix split = mesh_triangles(positions_, moved_quads);  // 2 triangles per quad, in order
+        std::vector<std::int32_t> changed;
+        changed.reserve(2 * quads.size());
         for (std::size_t k = 0; k < quads.size(); ++k) {
             triangles_.row(2 * Eigen::Index(quads[k])) = split.row(2 * Eigen::Index(k));
             triangles_.row(2 * Eigen::Index(quads[k]) + 1) = split.row(2 * Eigen::Index(k) + 1);
+            changed.push_back(2 * quads[k]), changed.push_back(2 * quads[k] + 1);
         }
-        for (const std::int32_t q : quads) mark_rows(2 * std::int64_t(q)), mark_rows(2 * std::int64_t(q) + 1);
-        update_voxel_centres_inside(positions_, triangles_, grid, rows, inside_);
+        update_wrong(inside_.update(positions_, triangles_, changed));
     }
 
     /// Linear indices of the voxels whose centre the mesh (quads split along their shorter
     /// diagonal) puts on the other side than the volume, increasing.
-    std::vector<std::int64_t> wrong() const {
-        std::vector<std::int64_t> voxels;
-        for (std::size_t v = 0; v < inside_.size(); ++v)
-            if ((inside_[v] != 0) != (volume_.mask[v] != 0)) voxels.push_back(std::int64_t(v));
-        return voxels;
-    }
+    const std::vector<std::int64_t>& wrong() const { return wrong_; }
 
     /// The vertices at the pointels within `reach` voxels of the cube of `voxel` (linear index):
     /// pointels a with i − reach ≤ a ≤ i + 1 + reach on each axis, increasing.
@@ -157,12 +151,32 @@ private:
     /// Orders pointels by (c, b, a); coordinates from 0 to dims < kKeySide (check_inputs).
     static std::int64_t key(std::int64_t a, std::int64_t b, std::int64_t c) { return a + kKeySide * (b + kKeySide * c); }
 
+    bool is_wrong(std::size_t voxel) const { return (inside_.inside()[voxel] != 0) != (volume_.mask[voxel] != 0); }
+
+    /// wrong_ after the voxel rows `rows` (index j + ny·k, increasing) were classified again.
+    void update_wrong(const std::vector<std::int64_t>& rows) {
+        const std::int64_t nx = volume_.grid.dims[0];
+        std::vector<std::int64_t> merged;
+        merged.reserve(wrong_.size());
+        auto old = wrong_.begin();
+        for (const std::int64_t row : rows) {  // voxels nx·row … nx·row + nx − 1
+            const std::int64_t first = nx * row, last = first + nx;
+            while (old != wrong_.end() && *old < first) merged.push_back(*old++);
+            while (old != wrong_.end() && *old < last) ++old;
+            for (std::int64_t v = first; v < last; ++v)
+                if (is_wrong(std::size_t(v))) merged.push_back(v);
+        }
+        merged.insert(merged.end(), old, wrong_.end());
+        wrong_ = std::move(merged);
+    }
+
     const BinaryVolume& volume_;
     const DigitalSurface& surface_;
     PointMatrix positions_;          ///< of the last update
     FaceMatrix triangles_;           ///< 2q, 2q + 1: quad q split along its shorter diagonal at positions_
-    std::vector<std::uint8_t> inside_;  ///< per voxel: its centre is inside the mesh
+    VoxelCentresInside inside_;      ///< the voxel centres inside the mesh of triangles_
     const VertexCorners& corners_;  ///< the quads around each vertex
+    std::vector<std::int64_t> wrong_;  ///< the voxels whose centre is on the wrong side, increasing
     std::vector<std::pair<std::int64_t, std::int32_t>> pointel_vertices_;  ///< (pointel key, vertex), sorted
 };
 
