@@ -50,6 +50,16 @@ struct AdaptiveNormalOptions {
     int smoothing_steps = 0;      ///< steps of averaging over the adjacent faces where r < smoothing_below
     double smoothing_below = 0;   ///< physical units
     double smoothing_power = 2;   ///< weight of a neighbour g of f: max(0, u_f·u_g)^power
+    /// Noisy thin parts: after the smoothing above, a face with r < smoothing_below gets this
+    /// many more steps where the share of faces around it whose normal points against their
+    /// surfel (u·n < 0) is at least noisy_share. The share: that indicator averaged with the four
+    /// edge-adjacent faces noisy_share_passes times (each pass reaches about one ring further).
+    /// On a clean thin part the four steps leave next to no such face; among flipped voxels the
+    /// small balls see the noise and only a long average over the surface removes it
+    /// (docs/accuracy.md, "Noise on thin parts"). 0 = off.
+    int noisy_smoothing_steps = 0;
+    double noisy_share = 0.005;
+    int noisy_share_passes = 8;
     /// Hand the distance maps of the reach to the caller (AdaptiveNormalField::reach_maps) rather
     /// than free them on return: for a later stage that needs the maps of the same cap (the
     /// pipeline's thin-part weights), which then need not compute them again.
@@ -62,6 +72,7 @@ struct AdaptiveNormalField {
     Eigen::VectorXd extrapolated;  ///< 1 where the field is extrapolated, else 0
     SurfelReach reach;       ///< the robust reach the radii come from
     double reach_cap = 0;    ///< up to which it was measured (physical units)
+    std::int64_t noisy_smoothed_faces = 0;  ///< faces given the noisy_smoothing_steps
     /// With AdaptiveNormalOptions::keep_reach_maps: the maps the reach was measured on (their
     /// cap: max(reach_cap, max_radius / 2)); 2 bytes per voxel of the grown grid, to be released
     /// once used.

@@ -148,6 +148,9 @@ double default_grid_step(const ImplicitShape& shape);
 // ---------------------------------------------------------------------------------------------
 // Stage 3: the normal field.
 
+/// --ii-noise-smoothing's default, chosen on the accuracy suite (docs/accuracy.md, "Noise on thin parts").
+constexpr int kDefaultNoisySmoothingSteps = 40;
+
 struct NormalFieldOptions {
     std::string kind;  ///< --normals: ii trivial ctrivial exact at; empty: ii (or the field of --normals-file)
     std::optional<std::string> at_input;  ///< --at-input: the field g that AT regularizes (default ii)
@@ -156,6 +159,9 @@ struct NormalFieldOptions {
     /// --ii-extrapolation-threshold (degrees): the adaptive field's Richardson correction is shrunk
     /// by this (AdaptiveNormalOptions::extrapolation_threshold_deg); unset = that default, 0.75°.
     std::optional<double> extrapolation_threshold_deg;
+    /// --ii-noise-smoothing: the adaptive field's extra steps of averaging on noisy thin parts
+    /// (AdaptiveNormalOptions::noisy_smoothing_steps); unset = kDefaultNoisySmoothingSteps, 0 = off.
+    std::optional<int> noisy_smoothing_steps;
     std::string ii_kernel = "biweight";   ///< --ii-kernel: ball or biweight
     bool ii_extrapolate = false;          ///< --ii-extrapolate: 2·n(r/√2) − n(r)
     std::string file;                     ///< --normals-file: g (with --normals at) or the field itself

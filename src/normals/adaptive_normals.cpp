@@ -85,6 +85,8 @@ void check_options(const AdaptiveNormalOptions& o) {
     if (!positive(o.reach_factor)) throw Error("adaptive normals: the reach factor must be positive and finite");
     if (!(o.reach_cap >= 0) || !std::isfinite(o.reach_cap)) throw Error("adaptive normals: the reach cap must be finite");
     if (o.levels_per_octave < 2) throw Error("adaptive normals: at least two radius levels per octave");
+    if (o.noisy_smoothing_steps < 0 || o.noisy_share_passes < 0 || !(o.noisy_share >= 0 && o.noisy_share <= 1))
+        throw Error("adaptive normals: the noisy smoothing needs steps and passes >= 0 and a share in [0, 1]");
 }
 
 /// Where n(r) and n(r/√2) agree, n(r) plus the Richardson correction 2·(n(r/√2) − n(r)) shrunk
@@ -194,6 +196,40 @@ void smooth_field(const DigitalSurface& surface, PointMatrix& u, int steps, doub
     }
 }
 
+/// Per face, the share of the faces around it whose normal points against their surfel: the
+/// indicator averaged with the four edge-adjacent faces `passes` times.
+Eigen::VectorXd share_against_surfels(const DigitalSurface& surface, const PointMatrix& u, int passes) {
+    const std::int64_t m = surface.face_count();
+    Eigen::VectorXd share = Eigen::VectorXd::Zero(m);
+    for (const std::int32_t f : faces_against_their_surfels(surface, u)) share[f] = 1;
+    Eigen::VectorXd next(m);
+    for (int pass = 0; pass < passes; ++pass) {
+        for (std::int64_t f = 0; f < m; ++f) {
+            double sum = share[f];
+            for (int e = 0; e < 4; ++e) sum += share[surface.adjacent_face(f, e)];
+            next[f] = sum / 5;
+        }
+        share.swap(next);
+    }
+    return share;
+}
+
+/// The smoothing of the thin parts' small balls (AdaptiveNormalOptions::smoothing_steps), then
+/// the longer one of the noisy thin faces (noisy_smoothing_steps).
+void smooth_thin_parts(const DigitalSurface& surface, const AdaptiveNormalOptions& o, AdaptiveNormalField& field) {
+    const std::int64_t m = surface.face_count();
+    std::vector<std::uint8_t> smooth(static_cast<std::size_t>(m));
+    for (std::int64_t f = 0; f < m; ++f) smooth[std::size_t(f)] = field.radius[f] < o.smoothing_below ? 1 : 0;
+    smooth_field(surface, field.normals, o.smoothing_steps, o.smoothing_power, smooth);
+    if (o.noisy_smoothing_steps <= 0) return;
+    const Eigen::VectorXd share = share_against_surfels(surface, field.normals, o.noisy_share_passes);
+    for (std::int64_t f = 0; f < m; ++f) {
+        smooth[std::size_t(f)] = smooth[std::size_t(f)] && share[f] >= o.noisy_share ? 1 : 0;
+        field.noisy_smoothed_faces += smooth[std::size_t(f)];
+    }
+    if (field.noisy_smoothed_faces > 0) smooth_field(surface, field.normals, o.noisy_smoothing_steps, o.smoothing_power, smooth);
+}
+
 }  // namespace
 
 AdaptiveNormalField adaptive_integral_invariant_normals(const VoxelLabels& volume, const DigitalSurface& surface,
@@ -243,11 +279,7 @@ AdaptiveNormalField adaptive_integral_invariant_normals(const VoxelLabels& volum
     field.normals = std::move(normals);
     field.extrapolated = Eigen::VectorXd::Zero(m);
     if (o.extrapolate) extrapolate_field(surface, levels, level, narrow, o, field);
-    if (o.smoothing_steps > 0) {
-        std::vector<std::uint8_t> smooth(static_cast<std::size_t>(m));
-        for (std::int64_t f = 0; f < m; ++f) smooth[std::size_t(f)] = field.radius[f] < o.smoothing_below ? 1 : 0;
-        smooth_field(surface, field.normals, o.smoothing_steps, o.smoothing_power, smooth);
-    }
+    smooth_thin_parts(surface, o, field);
     if (o.keep_reach_maps) field.reach_maps = std::move(kept);
     return field;
 }

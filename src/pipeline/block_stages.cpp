@@ -38,6 +38,7 @@ void refuse_global_options(const PipelineOptions& o, const std::string& driver) 
     const std::string whole = "it is measured on the whole object (not block by block yet)";
     refuse(o.normals.max_radius.has_value(), "--ii-max-radius", whole);
     refuse(o.normals.extrapolation_threshold_deg.has_value(), "--ii-extrapolation-threshold", whole);
+    refuse(o.normals.noisy_smoothing_steps.has_value(), "--ii-noise-smoothing", whole);
     refuse(e.alpha_reach && *e.alpha_reach > 0, "--alpha-reach", whole);
     refuse(e.alpha_reach_sheet.has_value(), "--alpha-reach-sheet", whole);
     refuse(e.shrink_correction && *e.shrink_correction > 0, "--shrink-correction", whole);

@@ -151,6 +151,7 @@ AdaptiveNormalOptions default_adaptive_options(const NormalFieldOptions& o, cons
     adaptive.keep_reach_maps = true;
     adaptive.smoothing_steps = 4;       // on thin parts, whose small balls are noisy
     adaptive.smoothing_below = 5.0 * voxel;
+    adaptive.noisy_smoothing_steps = o.noisy_smoothing_steps.value_or(kDefaultNoisySmoothingSteps);
     adaptive.kernel = parse_integral_invariant_kernel(o.ii_kernel);
     adaptive.extrapolation_threshold_deg = o.extrapolation_threshold_deg.value_or(adaptive.extrapolation_threshold_deg);
     return adaptive;
@@ -201,6 +202,10 @@ void check_normal_field_options(const NormalFieldOptions& o, bool input_is_shape
     if (o.max_radius && (o.radius || o.ii_extrapolate || input_kind(o) != "ii"))
         throw Error("--ii-max-radius applies to the adaptive integral invariants only (not with --radius, "
                     "--ii-extrapolate or another field)");
+    if (o.noisy_smoothing_steps && (o.radius || o.ii_extrapolate || input_kind(o) != "ii"))
+        throw Error("--ii-noise-smoothing applies to the adaptive integral invariants only (not with --radius, "
+                    "--ii-extrapolate or another field)");
+    if (o.noisy_smoothing_steps && *o.noisy_smoothing_steps < 0) throw Error("--ii-noise-smoothing must be zero or positive");
     const std::optional<double>& threshold = o.extrapolation_threshold_deg;
     if (threshold && (!(*threshold >= 0) || !std::isfinite(*threshold)))
         throw Error("--ii-extrapolation-threshold must be zero or positive (degrees)");

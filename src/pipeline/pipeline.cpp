@@ -510,7 +510,8 @@ nlohmann::json pipeline_report(const PipelineResult& r, const PipelineOptions& o
                                  {"radius_max", a.radius.maxCoeff()},
                                  {"extrapolated_share", a.extrapolated.mean()},
                                  {"reach_min", a.reach.smallest().minCoeff()},
-                                 {"reach_cap", a.reach_cap}};
+                                 {"reach_cap", a.reach_cap},
+                                 {"noisy_smoothed_faces", a.noisy_smoothed_faces}};
     }
     if (r.weights.vertex_alpha.size() > 0)
         report["thin_part_alpha"] = {{"reference_reach", alpha_reach(o.extensions, r.grid)},
