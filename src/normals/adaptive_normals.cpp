@@ -196,14 +196,16 @@ void smooth_field(const DigitalSurface& surface, PointMatrix& u, int steps, doub
     }
 }
 
-/// Per face, the share of the faces around it whose normal points against their surfel: the
-/// indicator averaged with the four edge-adjacent faces `passes` times.
-Eigen::VectorXd share_against_surfels(const DigitalSurface& surface, const PointMatrix& u, int passes) {
+/// Per face, the share of the faces around it that are in `against` (those whose normal points
+/// against their surfel): the indicator averaged with the four edge-adjacent faces `passes` times.
+Eigen::VectorXd share_against_surfels(const DigitalSurface& surface, const std::vector<std::int32_t>& against,
+                                      int passes) {
     const std::int64_t m = surface.face_count();
     Eigen::VectorXd share = Eigen::VectorXd::Zero(m);
-    for (const std::int32_t f : faces_against_their_surfels(surface, u)) share[f] = 1;
+    for (const std::int32_t f : against) share[f] = 1;
     Eigen::VectorXd next(m);
     for (int pass = 0; pass < passes; ++pass) {
+#pragma omp parallel for schedule(static)
         for (std::int64_t f = 0; f < m; ++f) {
             double sum = share[f];
             for (int e = 0; e < 4; ++e) sum += share[surface.adjacent_face(f, e)];
@@ -222,7 +224,9 @@ void smooth_thin_parts(const DigitalSurface& surface, const AdaptiveNormalOption
     for (std::int64_t f = 0; f < m; ++f) smooth[std::size_t(f)] = field.radius[f] < o.smoothing_below ? 1 : 0;
     smooth_field(surface, field.normals, o.smoothing_steps, o.smoothing_power, smooth);
     if (o.noisy_smoothing_steps <= 0) return;
-    const Eigen::VectorXd share = share_against_surfels(surface, field.normals, o.noisy_share_passes);
+    const std::vector<std::int32_t> against = faces_against_their_surfels(surface, field.normals);
+    if (against.empty()) return;  // a clean smooth object: no share to average
+    const Eigen::VectorXd share = share_against_surfels(surface, against, o.noisy_share_passes);
     for (std::int64_t f = 0; f < m; ++f) {
         smooth[std::size_t(f)] = smooth[std::size_t(f)] && share[f] >= o.noisy_share ? 1 : 0;
         field.noisy_smoothed_faces += smooth[std::size_t(f)];
