@@ -327,6 +327,7 @@ TEST(InsideTest, UpdatingTheMovedTrianglesGivesTheWholeClassification) {
             if (whole[v] != before[v]) EXPECT_TRUE(std::binary_search(rows.begin(), rows.end(), std::int64_t(v) / nx)) << v;
     }
     EXPECT_THROW(tracked.update(at, triangles.topRows(3), {0}), Error);
+    EXPECT_THROW(tracked.update(at, FaceMatrix(triangles.leftCols(2)), {0}), Error);
     EXPECT_THROW(tracked.update(at, triangles, {std::int32_t(triangles.rows())}), Error);
 }
 

@@ -130,9 +130,10 @@ VoxelCentresInside::VoxelCentresInside(const PointMatrix& vertices, const FaceMa
 
 std::vector<std::int64_t> VoxelCentresInside::update(const PointMatrix& vertices, const FaceMatrix& triangles,
                                                      const std::vector<std::int32_t>& changed) {
-    if (std::size_t(triangles.rows()) != triangle_rows_.size())
-        throw Error("VoxelCentresInside::update: " + std::to_string(triangles.rows()) + " triangles, " +
-                    std::to_string(triangle_rows_.size()) + " expected");
+    if (std::size_t(triangles.rows()) != triangle_rows_.size() || (triangles.rows() > 0 && triangles.cols() != 3))
+        throw Error("VoxelCentresInside::update: " + std::to_string(triangles.rows()) + " faces of " +
+                    std::to_string(triangles.cols()) + " vertices, " + std::to_string(triangle_rows_.size()) +
+                    " triangles expected");
     for (const std::int32_t t : changed) {
         if (t < 0 || t >= triangles.rows())
             throw Error("VoxelCentresInside::update: triangle " + std::to_string(t) + " out of range");
