@@ -71,8 +71,7 @@ void add_normal_field_options(CLI::App& cmd, NormalFieldOptions& o, PipelineOutp
     cmd.add_option("--ii-noise-smoothing", o.noisy_smoothing_steps,
                    "Noisy thin parts: the adaptive field's faces of radius under 5 voxels (thin parts), where a share of at least 0.005 "
                    "of the faces within about 8 rings point against their surfel, get this many more steps of averaging "
-                   "with their neighbours (docs/accuracy.md, 'Noise on thin parts'); 0 = off. Default 40")
-        ->check(CLI::NonNegativeNumber);
+                   "with their neighbours (docs/accuracy.md, 'Noise on thin parts'); 0 = off. Default 40");
     cmd.add_option("--ii-kernel", o.ii_kernel,
                    "Weights of the integral-invariant ball: biweight (1 - d^2/r^2)^2, smooth, more accurate "
                    "(docs/accuracy.md), or ball (uniform, the paper's integral invariants)")

@@ -40,6 +40,10 @@ expect_error "empty object names the range" "no voxel has 5 <= value <= 9" regul
 expect_error "empty object gives the file's values" "its values range from 0 to 0" regularize "$work/empty.vol" \
     -o "$work/out.obj"
 expect_error "alpha named as typed" "--alpha 0: must be positive" regularize --shape sphere1 --alpha 0 -o "$work/out.obj"
+expect_error "noise smoothing not negative" "--ii-noise-smoothing must be zero or positive" regularize --shape sphere1 \
+    --ii-noise-smoothing -3 -o "$work/out.obj"
+expect_error "noise smoothing needs the adaptive field" "--ii-noise-smoothing applies to the adaptive" regularize \
+    --shape sphere1 --radius 0.3 --ii-noise-smoothing 10 -o "$work/out.obj"
 
 # Piecewise-smooth normals (Ambrosio-Tortorelli): feature map in the PLY, feature lines, report.
 cube="x^20+y^20+z^20-1"
