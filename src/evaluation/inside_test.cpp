@@ -68,12 +68,15 @@ std::pair<std::int64_t, std::int64_t> row_range(double low, double high, double 
     return {lo, hi};
 }
 
+void check_triangle(const PointMatrix& vertices, const FaceMatrix& triangles, Eigen::Index t, const char* caller) {
+    for (int k = 0; k < 3; ++k)
+        if (triangles(t, k) < 0 || triangles(t, k) >= vertices.rows())
+            throw Error(std::string(caller) + ": triangle " + std::to_string(t) + " has a vertex index out of range");
+}
+
 void check_triangles(const PointMatrix& vertices, const FaceMatrix& triangles, const char* caller) {
     if (triangles.rows() > 0 && triangles.cols() != 3) throw Error(std::string(caller) + ": the faces must be triangles");
-    for (Eigen::Index t = 0; t < triangles.rows(); ++t)
-        for (int k = 0; k < 3; ++k)
-            if (triangles(t, k) < 0 || triangles(t, k) >= vertices.rows())
-                throw Error(std::string(caller) + ": triangle " + std::to_string(t) + " has a vertex index out of range");
+    for (Eigen::Index t = 0; t < triangles.rows(); ++t) check_triangle(vertices, triangles, t, caller);
 }
 
 /// Classifies the voxel centres of row (j, k) into `row_inside` (nx values) against the
@@ -137,9 +140,7 @@ std::vector<std::int64_t> VoxelCentresInside::update(const PointMatrix& vertices
     for (const std::int32_t t : changed) {
         if (t < 0 || t >= triangles.rows())
             throw Error("VoxelCentresInside::update: triangle " + std::to_string(t) + " out of range");
-        for (int k = 0; k < 3; ++k)
-            if (triangles(t, k) < 0 || triangles(t, k) >= vertices.rows())
-                throw Error("VoxelCentresInside::update: triangle " + std::to_string(t) + " has a vertex index out of range");
+        check_triangle(vertices, triangles, t, "VoxelCentresInside::update");
     }
     // The changed triangles leave the rows they were listed in (one pass over each such row),
     // then join the rows of their new boxes.
