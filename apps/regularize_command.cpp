@@ -212,6 +212,9 @@ void apply_flags(RegularizeCommand& c) {
     c.outputs.space = parse_output_space(f.space);
     c.options.connectivity = f.connectivity == 6 ? Connectivity::Six : Connectivity::TwentySix;
     c.options.validity = f.no_check ? ValidityMode::Off : f.no_repair ? ValidityMode::Check : ValidityMode::Repair;
+    c.options.keep_voxels = f.keep_voxels      ? VoxelKeeping::Always
+                            : f.no_keep_voxels ? VoxelKeeping::Never
+                                               : VoxelKeeping::Auto;
     NormalFieldOptions& normals = c.options.normals;
     const bool at = normals.kind == "at";
     for (const CLI::Option* option : f.at_only)
@@ -303,10 +306,15 @@ void add_pipeline_flags(CLI::App& command, RegularizeCommand& c) {
                      "Keep the mesh as solved: self-intersections and faces folded against u are counted and reported "
                      "but not repaired (docs/validity.md)");
     command.add_flag("--no-check", c.flags.no_check, "Do not even count them (implies --no-repair)");
-    command.add_flag("--keep-voxels", c.options.keep_voxels,
-                     "The repair also puts back every voxel centre the solved mesh has on the wrong side (except "
-                     "where the voxels are noisy), bounding the vertices around it along their faces' axes "
-                     "(docs/validity.md)");
+    CLI::Option* keep_voxels =
+        command.add_flag("--keep-voxels", c.flags.keep_voxels,
+                         "The repair also puts back every voxel centre the solved mesh has on the wrong side (except "
+                         "where the voxels are noisy), bounding the vertices around it along their faces' axes; by "
+                         "default only when the object voxels left outside are at least 1 % of the object's "
+                         "(docs/validity.md)");
+    command.add_flag("--no-keep-voxels", c.flags.no_keep_voxels,
+                     "Leave the voxel centres as the solve puts them, and do not count them")
+        ->excludes(keep_voxels);
     command.add_flag("--triangulate", c.outputs.triangulate, "Split each quad along its shorter diagonal");
     command.add_option("--input-mesh", c.outputs.input_mesh, "Also write the unregularized digital surface to this file");
     command.add_option("--report", c.outputs.report, "Write counts, timings, energies and parameters as JSON");

@@ -30,6 +30,7 @@ struct CliFlags {
     std::string space = "lps";
     bool quiet = false, verbose = false, progress = false;
     bool no_repair = false, no_check = false;
+    bool keep_voxels = false, no_keep_voxels = false;
 };
 
 struct RegularizeCommand {

@@ -107,6 +107,11 @@ struct ValidityRepairOptions {
     /// A voxel with a `noisy_voxels` vertex within `voxel_reach` is left as it is: where the
     /// voxels are noise the surface should not follow them.
     const BinaryVolume* voxels = nullptr;
+    /// With `voxels`: the centres are put back only when the object voxels among the wrong ones
+    /// (noise included) are at least this share of all object voxels of `voxels` (0: always);
+    /// below it they are counted and reported (wrong_voxels_before/after) and the repair is that
+    /// of validity alone. The pipeline's default, kVoxelPutBackShare.
+    double put_back_from_share = 0;
     std::vector<char> noisy_voxels;  ///< per vertex (empty: none)
     double voxel_half_width = 0.499;
     int voxel_reach = 1;
@@ -139,6 +144,10 @@ struct ValidityRepairReport {
     std::int64_t wrong_voxels_after = -1;
     std::int64_t bounded_vertices = 0;
     std::int64_t noisy_wrong_voxels = 0;     ///< of wrong_voxels_after, left as noise (noisy_voxels)
+    /// With options.voxels: the object voxels of wrong_voxels_before (centre outside p*), what
+    /// put_back_from_share is compared with; and whether the centres were put back.
+    std::int64_t outside_object_voxels_before = -1;
+    bool voxels_put_back = false;
 };
 
 struct ValidityRepairResult {

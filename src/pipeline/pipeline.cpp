@@ -78,8 +78,8 @@ std::string validity_counts(const MeshValidity& v) {
 
 /// What the check and repair did, for the stage line and the summary line.
 std::string validity_text(const ValidityRepairReport& r, const RegularizationWeights& w) {
-    std::string voxels;  // --keep-voxels
-    if (r.wrong_voxels_before > 0)
+    std::string voxels;  // when put back (VoxelKeeping); counted only: in the report
+    if (r.voxels_put_back)
         voxels = ", " + std::to_string(r.wrong_voxels_before - r.wrong_voxels_after) + " of " +
                  std::to_string(r.wrong_voxels_before) + " voxel centres put back on their side";
     if (r.rounds == 0) return (r.before.valid() ? "valid solid" : validity_counts(r.before) + " (not repaired)") + voxels;
@@ -117,6 +117,8 @@ nlohmann::json validity_json(const ValidityRepairReport& r, const Regularization
             {"wrong_voxels_before", r.wrong_voxels_before},
             {"wrong_voxels_after", r.wrong_voxels_after},
             {"noisy_wrong_voxels", r.noisy_wrong_voxels},
+            {"outside_object_voxels_before", r.outside_object_voxels_before},
+            {"voxels_put_back", r.voxels_put_back},
             {"bounded_vertices", r.bounded_vertices},
             {"seconds", {{"check", r.check_seconds}, {"solve", r.solve_seconds}}}};
 }
@@ -126,9 +128,10 @@ nlohmann::json validity_json(const ValidityRepairReport& r, const Regularization
 void check_and_repair(const PipelineOptions& o, PipelineResult& result, StageClock& clock, const BinaryVolume* voxels) {
     clock.start("validity");
     ValidityRepairOptions options;
-    if (o.keep_voxels && voxels) {
+    if (o.keep_voxels != VoxelKeeping::Never && voxels) {
         options.voxels = voxels;
         options.noisy_voxels = noisy_voxel_vertices(result.surface, result.field);
+        options.put_back_from_share = o.keep_voxels == VoxelKeeping::Auto ? kVoxelPutBackShare : 0.0;
     }
     if (o.validity == ValidityMode::Check) options.max_rounds = 0;
     // Where the voxels are noisy, a fold is first smoothed (docs/accuracy.md, "Noisy voxels").

@@ -180,6 +180,13 @@ private:
     std::vector<std::pair<std::int64_t, std::int32_t>> pointel_vertices_;  ///< (pointel key, vertex), sorted
 };
 
+/// Whether a voxel is left as noise: a vertex around it is one of options.noisy_voxels'.
+bool left_as_noise(const VoxelSides& sides, std::int64_t voxel, const ValidityRepairOptions& o) {
+    for (const std::int32_t v : sides.vertices_near(voxel, o.voxel_reach))
+        if (std::size_t(v) < o.noisy_voxels.size() && o.noisy_voxels[std::size_t(v)]) return true;
+    return false;
+}
+
 /// Eigen's approximate minimum degree ordering computed on the 3×3 block pattern of a part's
 /// system (unknowns 3i + d) and expanded to the unknowns: the three coordinates of a vertex stay
 /// together, as their dense block couples them anyway, and the ordering works on a graph of a
@@ -404,13 +411,6 @@ public:
         std::sort(newly.begin(), newly.end());
         newly.erase(std::unique(newly.begin(), newly.end()), newly.end());
         return newly;
-    }
-
-    /// Whether a voxel is left as noise: a vertex around it is one of noisy_voxels'.
-    bool noisy_voxel(const VoxelSides& sides, std::int64_t voxel) const {
-        for (const std::int32_t v : sides.vertices_near(voxel, o_.voxel_reach))
-            if (std::size_t(v) < o_.noisy_voxels.size() && o_.noisy_voxels[std::size_t(v)]) return true;
-        return false;
     }
 
     std::int64_t bounded_vertex_count() const { return std::count(bounded_.begin(), bounded_.end(), 1); }
@@ -1095,18 +1095,46 @@ ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointM
     report.energy_before = regularization_energy(positions, surface.vertices, surface.quads, links, normals, weights);
     report.energy_after = report.energy_before;
     report.check_seconds = report.before.seconds;
-    // Voxel centres on the wrong side (options.voxels; the reversible mode keeps them all).
+    // Voxel centres on the wrong side (options.voxels; the reversible mode keeps them all), and
+    // of those the ones to put back: not those left as noise (decided once per voxel).
     std::optional<VoxelSides> sides;
-    std::vector<std::int64_t> wrong;
+    std::vector<std::int64_t> wrong, to_fix;
+    std::unordered_map<std::int64_t, bool> noisy;
     double voxel_seconds = 0;
+    const auto update_voxels = [&](const PointMatrix& at, const std::vector<std::int32_t>& moved) {
+        const auto started = Clock::now();
+        sides->update(at, moved);
+        wrong = sides->wrong();
+        to_fix.clear();
+        for (const std::int64_t v : wrong) {
+            const auto [it, added] = noisy.try_emplace(v, false);
+            if (added) it->second = left_as_noise(*sides, v, options);
+            if (!it->second) to_fix.push_back(v);
+        }
+        voxel_seconds += seconds_since(started);
+    };
     if (options.voxels && !options.clamp_half_width) {
         const auto started = Clock::now();
         sides.emplace(*options.voxels, surface, positions, tracker.corners());
-        wrong = sides->wrong();
         voxel_seconds += seconds_since(started);
-        report.wrong_voxels_before = report.wrong_voxels_after = std::int64_t(wrong.size());
+        update_voxels(positions, {});
+        report.wrong_voxels_before = std::int64_t(wrong.size());
+        report.outside_object_voxels_before = std::count_if(
+            wrong.begin(), wrong.end(), [&](std::int64_t v) { return options.voxels->mask[std::size_t(v)] != 0; });
+        report.voxels_put_back =
+            !to_fix.empty() && (options.put_back_from_share <= 0 ||
+                                double(report.outside_object_voxels_before) >=
+                                    options.put_back_from_share * double(options.voxels->object_voxel_count()));
     }
-    if ((report.before.valid() && wrong.empty()) || options.max_rounds == 0) {
+    const auto record_voxels = [&] {
+        if (!sides) return;
+        report.wrong_voxels_after = std::int64_t(wrong.size());
+        report.noisy_wrong_voxels = std::int64_t(wrong.size() - to_fix.size());
+    };
+    const auto done = [&] { return report.after.valid() && (!report.voxels_put_back || to_fix.empty()); };
+    if (done() || options.max_rounds == 0) {
+        record_voxels();
+        report.check_seconds += voxel_seconds;
         result.positions = positions;
         result.normals = normals;
         result.alpha_factors = Eigen::VectorXd::Ones(surface.vertex_count());
@@ -1120,30 +1148,14 @@ ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointM
                   complex && !options.grade_junction_turns ? junction_turn_vertices(surface, edges) : std::vector<char>(),
                   normals, weights, positions, options);
     MeshValidity& validity = report.after;
-    // The wrong voxels to put back: not those left as noise (decided once per voxel).
-    std::unordered_map<std::int64_t, bool> noisy;
-    std::vector<std::int64_t> to_fix;
-    const auto update_voxels = [&](const PointMatrix& at, const std::vector<std::int32_t>& moved) {
-        if (!sides) return;
-        const auto started = Clock::now();
-        sides->update(at, moved);
-        wrong = sides->wrong();
-        voxel_seconds += seconds_since(started);
-        to_fix.clear();
-        for (const std::int64_t v : wrong) {
-            const auto [it, added] = noisy.try_emplace(v, false);
-            if (added) it->second = repair.noisy_voxel(*sides, v);
-            if (!it->second) to_fix.push_back(v);
-        }
-    };
-    update_voxels(positions, {});
+    std::vector<std::int32_t> moved_since_voxels;  // voxel sides only counted: updated once, at the end
     const auto update = [&](const std::vector<std::int32_t>& moved, const std::vector<std::int32_t>& refield) {
         const PointMatrix at = repair.positions();
         tracker.update(at, moved, refield, repair.field());
         validity = tracker.validity();
-        update_voxels(at, moved);
+        if (report.voxels_put_back) update_voxels(at, moved);
+        else if (sides) moved_since_voxels.insert(moved_since_voxels.end(), moved.begin(), moved.end());
     };
-    const auto done = [&] { return validity.valid() && to_fix.empty(); };
     Eigen::VectorXd last_valid;
     for (int exact_solves = 0; exact_solves < 3 && !done() && report.rounds < options.max_rounds; ++exact_solves) {
         while (!done() && report.rounds < options.max_rounds) {
@@ -1151,9 +1163,10 @@ ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointM
                             "round " + std::to_string(report.rounds + 1) + ": " +
                                 std::to_string(validity.intersecting_pairs) + " intersecting pairs, " +
                                 std::to_string(validity.folded_faces) + " folded faces" +
-                                (sides ? ", " + std::to_string(to_fix.size()) + " voxel centres on the wrong side" : ""));
+                                (report.voxels_put_back ? ", " + std::to_string(to_fix.size()) + " voxel centres on the wrong side" : ""));
             std::vector<std::int32_t> moved, refield;
-            const std::vector<std::int32_t> bounded = sides ? repair.bound_around(*sides, to_fix) : std::vector<std::int32_t>();
+            const std::vector<std::int32_t> bounded =
+                report.voxels_put_back ? repair.bound_around(*sides, to_fix) : std::vector<std::int32_t>();
             repair.round(validity, bounded, report, moved, refield);
             ++report.rounds;
             update(moved, refield);
@@ -1167,12 +1180,14 @@ ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointM
     }
     if (!validity.valid() && last_valid.size() > 0) update(repair.restore(last_valid), {});  // valid, not exact
     report.max_kkt_residual = repair.region_residual();
-    report.check_seconds = validity.seconds + voxel_seconds;
-    if (sides) {
-        report.wrong_voxels_after = std::int64_t(wrong.size());
-        report.noisy_wrong_voxels = std::int64_t(wrong.size() - to_fix.size());
-        report.bounded_vertices = repair.bounded_vertex_count();
+    if (!moved_since_voxels.empty()) {
+        std::sort(moved_since_voxels.begin(), moved_since_voxels.end());
+        moved_since_voxels.erase(std::unique(moved_since_voxels.begin(), moved_since_voxels.end()), moved_since_voxels.end());
+        update_voxels(repair.positions(), moved_since_voxels);
     }
+    report.check_seconds = validity.seconds + voxel_seconds;
+    record_voxels();
+    report.bounded_vertices = repair.bounded_vertex_count();
     repair.finish(result);
     result.positions = repair.positions();
     result.normals = repair.field();
