@@ -450,11 +450,25 @@ BinaryVolume bumpy_ball() {
     return volume;
 }
 
+/// The bumpy ball, its surface, its II normals (r = 3) and its exact solve with the paper's weights.
+struct SolvedBumpyBall {
+    BinaryVolume volume;
+    DigitalSurface surface;
+    PointMatrix normals;
+    RegularizationResult solved;
+};
+
+SolvedBumpyBall solved_bumpy_ball() {
+    SolvedBumpyBall ball;
+    ball.volume = bumpy_ball();
+    ball.surface = extract_digital_surface(ball.volume, Connectivity::TwentySix);
+    ball.normals = integral_invariant_normals(ball.volume, ball.surface, 3.0);
+    ball.solved = regularize(ball.surface, ball.normals, RegularizationWeights{}, cholmod());
+    return ball;
+}
+
 TEST(ValidityRepair, PutsEveryVoxelCentreBackOnItsSideAtTheMinimizerWithinTheBounds) {
-    const BinaryVolume volume = bumpy_ball();
-    const DigitalSurface s = extract_digital_surface(volume, Connectivity::TwentySix);
-    const PointMatrix u = integral_invariant_normals(volume, s, 3.0);
-    const RegularizationResult solved = regularize(s, u, RegularizationWeights{}, cholmod());
+    const auto [volume, s, u, solved] = solved_bumpy_ball();
     const std::int64_t wrong = classify_voxel_centres(volume, solved.positions, s.quads).wrong();
     ASSERT_GT(wrong, 0) << "the bumps and dents should be smoothed away";
     ValidityRepairOptions options;
@@ -498,10 +512,7 @@ TEST(ValidityRepair, PutsEveryVoxelCentreBackOnItsSideAtTheMinimizerWithinTheBou
 }
 
 TEST(ValidityRepair, LeavesTheWrongVoxelCentresOfNoisyVerticesAsTheyAre) {
-    const BinaryVolume volume = bumpy_ball();
-    const DigitalSurface s = extract_digital_surface(volume, Connectivity::TwentySix);
-    const PointMatrix u = integral_invariant_normals(volume, s, 3.0);
-    const RegularizationResult solved = regularize(s, u, RegularizationWeights{}, cholmod());
+    const auto [volume, s, u, solved] = solved_bumpy_ball();
     ValidityRepairOptions options;
     options.voxels = &volume;
     options.noisy_voxels.assign(std::size_t(s.vertex_count()), 1);  // every vertex noisy
@@ -514,10 +525,7 @@ TEST(ValidityRepair, LeavesTheWrongVoxelCentresOfNoisyVerticesAsTheyAre) {
 }
 
 TEST(ValidityRepair, PutsTheVoxelCentresBackOnlyFromTheShareOfObjectVoxelsOutside) {
-    const BinaryVolume volume = bumpy_ball();
-    const DigitalSurface s = extract_digital_surface(volume, Connectivity::TwentySix);
-    const PointMatrix u = integral_invariant_normals(volume, s, 3.0);
-    const RegularizationResult solved = regularize(s, u, RegularizationWeights{}, cholmod());
+    const auto [volume, s, u, solved] = solved_bumpy_ball();
     PolygonMesh mesh;
     mesh.vertices = solved.positions;
     mesh.faces = s.quads;
