@@ -300,25 +300,6 @@ TEST(AdaptiveNormals, ThinTubeFieldIsAccurateWithTheBallWithinOrAcrossTheTube) {
     EXPECT_LT(adaptive, 8.0);
 }
 
-/// `volume` with a share of the voxels next to its surface (6-neighbours of the other kind)
-/// flipped, fixed seed: the noisy digitizations of bench/accuracy.py.
-BinaryVolume flip_voxels_next_to_surface(const BinaryVolume& volume, double share, unsigned seed) {
-    BinaryVolume noisy = volume;
-    std::mt19937 random(seed);
-    std::uniform_real_distribution<double> uniform(0.0, 1.0);
-    const Index3& d = volume.grid.dims;
-    for (std::int64_t k = 1; k + 1 < d[2]; ++k)
-        for (std::int64_t j = 1; j + 1 < d[1]; ++j)
-            for (std::int64_t i = 1; i + 1 < d[0]; ++i) {
-                const bool inside = volume.inside(i, j, k);
-                const bool next = volume.inside(i - 1, j, k) != inside || volume.inside(i + 1, j, k) != inside ||
-                                  volume.inside(i, j - 1, k) != inside || volume.inside(i, j + 1, k) != inside ||
-                                  volume.inside(i, j, k - 1) != inside || volume.inside(i, j, k + 1) != inside;
-                if (next && uniform(random) < share) noisy.mask[std::size_t(volume.grid.linear_index(i, j, k))] = !inside;
-            }
-    return noisy;
-}
-
 TEST(AdaptiveNormals, NoisyThinPartsAreSmoothedLongerAndCleanOnesAreLeftAlone) {
     // A torus of tube radius 2.4 voxels (h = 0.25), clean and with 5 % of the voxels next to its
     // surface flipped. Clean: no face is noisy, the field is that of the option off, bit for bit.
@@ -333,7 +314,7 @@ TEST(AdaptiveNormals, NoisyThinPartsAreSmoothedLongerAndCleanOnesAreLeftAlone) {
     EXPECT_EQ(clean_field.noisy_smoothed_faces, 0);
     EXPECT_EQ(clean_field.normals, adaptive_integral_invariant_normals(clean, clean_surface, off).normals);
 
-    const BinaryVolume noisy = flip_voxels_next_to_surface(clean, 0.05, 11);
+    const BinaryVolume noisy = test::flip_voxels_next_to_surface(clean, 0.05, 11);
     const DigitalSurface surface = extract_digital_surface(noisy, Connectivity::TwentySix);
     const AdaptiveNormalField smoothed = adaptive_integral_invariant_normals(noisy, surface, on);
     EXPECT_GT(smoothed.noisy_smoothed_faces, surface.face_count() / 4);

@@ -282,20 +282,7 @@ TEST(Pipeline, WithoutAMeshPathOnlyTheOtherOutputsAreWritten) {
 /// noise that turns many estimated normals into or along their faces.
 LoadedVolume loaded_noisy_ball() {
     LoadedVolume loaded = loaded_ball();
-    loaded.volume = test::make_ball(24, 9.0, 12.0);
-    std::mt19937 random(11);
-    std::bernoulli_distribution flip(0.2);
-    const BinaryVolume clean = loaded.volume;
-    const auto& dims = clean.grid.dims;
-    for (std::int64_t k = 1; k + 1 < dims[2]; ++k)
-        for (std::int64_t j = 1; j + 1 < dims[1]; ++j)
-            for (std::int64_t i = 1; i + 1 < dims[0]; ++i) {
-                const bool border = clean.inside(i, j, k) != clean.inside(i + 1, j, k) ||
-                                    clean.inside(i, j, k) != clean.inside(i, j + 1, k) ||
-                                    clean.inside(i, j, k) != clean.inside(i, j, k + 1);
-                if (border && flip(random))
-                    loaded.volume.mask[std::size_t(clean.grid.linear_index(i, j, k))] = clean.inside(i, j, k) ? 0 : 1;
-            }
+    loaded.volume = test::flip_voxels_next_to_surface(test::make_ball(24, 9.0, 12.0), 0.2, 11);
     return loaded;
 }
 

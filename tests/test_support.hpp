@@ -7,6 +7,7 @@
 #include <cmath>
 #include <functional>
 #include <initializer_list>
+#include <random>
 #include <string>
 
 #include "dsreg/error.hpp"
@@ -103,6 +104,25 @@ inline BinaryVolume make_ball(std::int64_t size, double r, double c) {
     return make_volume({size, size, size}, [=](double x, double y, double z) {
         return (x - c) * (x - c) + (y - c) * (y - c) + (z - c) * (z - c) <= r * r;
     });
+}
+
+/// `volume` with a share of the voxels next to its surface (6-neighbours of the other kind, off
+/// the volume's border) flipped, fixed seed: the noisy digitizations of bench/accuracy.py.
+inline BinaryVolume flip_voxels_next_to_surface(const BinaryVolume& volume, double share, unsigned seed) {
+    BinaryVolume noisy = volume;
+    std::mt19937 random(seed);
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    const Index3& d = volume.grid.dims;
+    for (std::int64_t k = 1; k + 1 < d[2]; ++k)
+        for (std::int64_t j = 1; j + 1 < d[1]; ++j)
+            for (std::int64_t i = 1; i + 1 < d[0]; ++i) {
+                const bool inside = volume.inside(i, j, k);
+                const bool next = volume.inside(i - 1, j, k) != inside || volume.inside(i + 1, j, k) != inside ||
+                                  volume.inside(i, j - 1, k) != inside || volume.inside(i, j + 1, k) != inside ||
+                                  volume.inside(i, j, k - 1) != inside || volume.inside(i, j, k + 1) != inside;
+                if (next && uniform(random) < share) noisy.mask[std::size_t(volume.grid.linear_index(i, j, k))] = !inside;
+            }
+    return noisy;
 }
 
 /// The message of the dsreg::Error thrown by `action`; a test failure if it throws nothing.
