@@ -88,7 +88,8 @@ TEST(LocalReach, LabelDistancesEqualTheBruteForceOnes) {
                             if (!outside && volume.at(x, y, z) == l) continue;
                             best = std::min(best, Eigen::Vector3d(double(x - i) * s.x(), double(y - j) * s.y(), double(z - k) * s.z()).norm());
                         }
-                EXPECT_NEAR(maps.at(i + maps.padding, j + maps.padding, k + maps.padding), best, maps.unit)
+                const Index3 y = maps.map_voxel({i, j, k});
+                EXPECT_NEAR(maps.at(y[0], y[1], y[2]), best, maps.unit)
                     << "voxel " << i << " " << j << " " << k;
                 ++checked;
             }
@@ -129,6 +130,63 @@ TEST(LocalReach, BinaryMapsEqualThoseOfTheSameObjectAsALabelMap) {
     }
     EXPECT_EQ(differing, 0);
     EXPECT_GT(saturated, 100);  // the cap was reached: the saturation is exercised
+}
+
+TEST(LocalReach, ASmallObjectInALargeGridHasMapsOnItsBoxAndTheReachesOfItsTightGrid) {
+    // Random blocks of two labels (a label map) or one (binary) in a tight grid, and the same
+    // voxels 17, 5, 9 voxels into a grid of 80 × 60 × 70 (spacings exact in binary, so that both
+    // place every voxel centre at the same coordinates): the maps cover the object's box and its
+    // padding only, and every reach and thickness is that of the tight grid.
+    std::mt19937 random(3);
+    std::uniform_int_distribution<int> pick(0, 2);
+    std::vector<int> block(5 * 4 * 4);
+    for (int& b : block) b = pick(random);
+    const Index3 tight{15, 12, 12}, offset{17, 5, 9}, large{80, 60, 70};
+    const Eigen::Vector3d spacing(1.0, 0.75, 1.25);
+    const auto label = [&](std::int64_t i, std::int64_t j, std::int64_t k) -> std::int64_t {
+        return block[std::size_t(i / 3 + 5 * (j / 3 + 4 * (k / 3)))];
+    };
+    for (const bool binary : {true, false}) {
+        SCOPED_TRACE(binary ? "binary" : "label map");
+        const auto make = [&](const Index3& dims, const Index3& at) {
+            LabelVolume labels = test::make_labels(dims, [&](std::int64_t i, std::int64_t j, std::int64_t k) -> std::int64_t {
+                const std::int64_t a = i - at[0], b = j - at[1], c = k - at[2];
+                if (a < 0 || b < 0 || c < 0 || a >= tight[0] || b >= tight[1] || c >= tight[2]) return 0;
+                const std::int64_t l = label(a, b, c);
+                return binary ? std::min<std::int64_t>(l, 1) : l;
+            });
+            labels.grid.spacing = spacing;
+            labels.grid.origin = spacing.cwiseProduct(Eigen::Vector3d(double(-at[0]), double(-at[1]), double(-at[2])));
+            return labels;
+        };
+        const LabelVolume small_labels = make(tight, {0, 0, 0}), large_labels = make(large, offset);
+        const BinaryVolume small_mask = test::indicator(small_labels, 1), large_mask = test::indicator(large_labels, 1);
+        const VoxelLabels small = binary ? VoxelLabels(small_mask) : VoxelLabels(small_labels);
+        const VoxelLabels big = binary ? VoxelLabels(large_mask) : VoxelLabels(large_labels);
+        const ReachMaps small_maps = reach_maps(small, 4.0), big_maps = reach_maps(big, 4.0);
+        EXPECT_EQ(big_maps.grid.voxel_count(), small_maps.grid.voxel_count()) << "the box and its padding only";
+        EXPECT_EQ(big_maps.first, (Index3{offset[0] + small_maps.first[0], offset[1] + small_maps.first[1], offset[2] + small_maps.first[2]}));
+        const DigitalSurface small_surface = binary ? extract_digital_surface(small_mask, Connectivity::TwentySix)
+                                                    : extract_digital_surface(small_labels, Connectivity::TwentySix);
+        const DigitalSurface big_surface = binary ? extract_digital_surface(large_mask, Connectivity::TwentySix)
+                                                  : extract_digital_surface(large_labels, Connectivity::TwentySix);
+        ASSERT_EQ(small_surface.face_count(), big_surface.face_count());
+        const SurfelReach a = surfel_reach(small, small_surface, trivial_normals(small_surface), small_maps);
+        const SurfelReach b = surfel_reach(big, big_surface, trivial_normals(big_surface), big_maps);
+        EXPECT_EQ(a.inner, b.inner);
+        EXPECT_EQ(a.outer, b.outer);
+        std::int64_t compared = 0;
+        for (std::int64_t k = 0; k < tight[2]; ++k)
+            for (std::int64_t j = 0; j < tight[1]; ++j)
+                for (std::int64_t i = 0; i < tight[0]; ++i) {
+                    const Index3 v{i, j, k}, w{i + offset[0], j + offset[1], k + offset[2]};
+                    ASSERT_EQ(half_local_thickness(small, small_maps, v, 4.0), half_local_thickness(big, big_maps, w, 4.0))
+                        << "voxel " << i << " " << j << " " << k;
+                    ++compared;
+                }
+        EXPECT_EQ(compared, tight[0] * tight[1] * tight[2]);
+        EXPECT_GT((a.smallest().array() < 4.0).count(), 100);  // thin blocks: the reaches are not all the cap
+    }
 }
 
 TEST(LocalReach, RingsForgetAOneVoxelBumpButNotAThinPlate) {

@@ -25,25 +25,35 @@
 
 namespace dsreg {
 
-/// D_bg on the object voxels and D_obj on the background voxels, on the grid grown by `padding`
-/// voxels (volume voxel (i,j,k) is (i,j,k) + padding), in units of `unit`. Distances above
-/// 2·(cap + the largest spacing) are stored as that value (reach_maps): every length the reaches
-/// and thicknesses compare with them is shorter, so they come out as with the exact distances.
+/// D_bg on the object voxels and D_obj on the background voxels, on the bounding box of the
+/// labelled voxels grown by `padding` voxels on every side (volume voxel v is map voxel v −
+/// first + padding), in units of `unit`. Everything outside the box is background, so every
+/// voxel within `padding` of a labelled one is in the maps, whatever the volume around it (a
+/// small structure in a large image costs its box, not the image). Distances above 2·(cap + the
+/// largest spacing) are stored as that value (reach_maps): every length the reaches and
+/// thicknesses compare with them is shorter, so they come out as with the exact distances.
 struct ReachMaps {
-    VoxelGrid grid;  ///< the grown grid
+    VoxelGrid grid;  ///< the grown box, in the volume's physical frame
     std::int64_t padding = 0;
+    Index3 first{0, 0, 0};  ///< the volume voxel where the box starts (before its padding)
     double unit = 1;  ///< physical length of one step of the stored distances
     double cap = 0;   ///< distances and reaches are meaningful up to this (physical)
     std::vector<std::uint16_t> distance;  ///< per voxel of `grid`: D_bg (object) or D_obj (background)
 
-    double at(std::int64_t i, std::int64_t j, std::int64_t k) const {  ///< physical distance, grown-grid voxel
+    double at(std::int64_t i, std::int64_t j, std::int64_t k) const {  ///< physical distance, map voxel
         return unit * distance[std::size_t(grid.linear_index(i, j, k))];
+    }
+    Index3 map_voxel(const Index3& v) const {  ///< of volume voxel v
+        return {v[0] - first[0] + padding, v[1] - first[1] + padding, v[2] - first[2] + padding};
+    }
+    Index3 volume_voxel(const Index3& y) const {  ///< of map voxel y
+        return {y[0] + first[0] - padding, y[1] + first[1] - padding, y[2] + first[2] - padding};
     }
 };
 
 /// The maps for reaches up to `cap` (physical units): the distance transform of the labelled
-/// voxels on the grown grid (4 bytes per voxel while it runs), then that of each label on its
-/// bounding box grown by one voxel (enough for the exact distances). Throws dsreg::Error for a cap that is
+/// voxels on their grown bounding box (4 bytes per voxel while it runs), then that of each label
+/// on its own bounding box grown by one voxel (enough for the exact distances). Throws dsreg::Error for a cap that is
 /// not positive and finite, or so large that the distances would not fit (about 4000 voxels).
 ReachMaps reach_maps(const VoxelLabels& volume, double cap);
 

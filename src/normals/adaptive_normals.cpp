@@ -164,10 +164,11 @@ std::vector<std::uint8_t> likely_thick(const VoxelLabels& volume, const DigitalS
         const FaceLabels labels = surface.face_labels.empty() ? FaceLabels{1, 0} : surface.face_labels[std::size_t(f)];
         const std::int64_t steps = std::int64_t(std::ceil(depth / volume.grid().spacing[s.axis]));
         const auto deep_enough = [&](std::int64_t offset, std::uint32_t label) {
-            Index3 y{s.voxel[0] + maps.padding, s.voxel[1] + maps.padding, s.voxel[2] + maps.padding};
+            Index3 y = maps.map_voxel({s.voxel[0], s.voxel[1], s.voxel[2]});
             y[std::size_t(s.axis)] += offset;
             if (!maps.grid.contains(y[0], y[1], y[2])) return false;
-            const std::uint32_t here = volume.at(y[0] - maps.padding, y[1] - maps.padding, y[2] - maps.padding);
+            const Index3 v = maps.volume_voxel(y);
+            const std::uint32_t here = volume.at(v[0], v[1], v[2]);
             return here == label && maps.at(y[0], y[1], y[2]) >= 0.5 * depth;
         };
         thick[std::size_t(f)] = deep_enough(-s.sign * steps, labels.inner) && deep_enough(s.sign * (steps + 1), labels.outer);

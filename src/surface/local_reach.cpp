@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 
 #include "dsreg/distance_transform.hpp"
@@ -41,9 +42,10 @@ bool voxel_at(const VoxelGrid& grid, const Eigen::Vector3d& p, Index3& voxel) {
     return true;
 }
 
-/// The label of grown-grid voxel y (0 in the padding).
+/// The label of map voxel y (0 beyond the volume).
 std::uint32_t label_at(const VoxelLabels& volume, const ReachMaps& maps, const Index3& y) {
-    return volume.at(y[0] - maps.padding, y[1] - maps.padding, y[2] - maps.padding);
+    const Index3 v = maps.volume_voxel(y);
+    return volume.at(v[0], v[1], v[2]);
 }
 
 /// The reach along one ray from `from` (local_reach.hpp) through the voxels of `label`, `anchor`
@@ -136,10 +138,46 @@ void fill_label_distances(const VoxelLabels& volume, std::uint32_t l, const std:
             for (std::int64_t i = 0; i < crop.grid.dims[0]; ++i) {
                 const std::int64_t c = crop.grid.linear_index(i, j, k);
                 if (!crop.mask[std::size_t(c)]) continue;
-                const std::int64_t g = maps.grid.linear_index(lo[0] + i + maps.padding, lo[1] + j + maps.padding,
-                                                              lo[2] + k + maps.padding);
+                const Index3 y = maps.map_voxel({lo[0] + i, lo[1] + j, lo[2] + k});
+                const std::int64_t g = maps.grid.linear_index(y[0], y[1], y[2]);
                 maps.distance[std::size_t(g)] = stored_distance(maps, distance[std::size_t(c)]);
             }
+}
+
+/// The lowest corner of the union of the label boxes (index 0 unused; a box with hi < lo absent).
+Index3 box_first(const LabelBoxes& boxes) {
+    Index3 first{std::numeric_limits<std::int64_t>::max(), std::numeric_limits<std::int64_t>::max(),
+                 std::numeric_limits<std::int64_t>::max()};
+    for (std::size_t l = 1; l < boxes.size(); ++l)
+        if (boxes[l][1][0] >= 0)
+            for (std::size_t a = 0; a < 3; ++a) first[a] = std::min(first[a], boxes[l][0][a]);
+    return first;
+}
+
+/// The labelled voxels (any label) of the union of the label boxes as a binary volume placed in
+/// the volume's physical frame, or nothing when that box is the whole grid (or empty).
+std::optional<BinaryVolume> labelled_box(const VoxelLabels& volume, const LabelBoxes& boxes) {
+    const Index3& d = volume.grid().dims;
+    Index3 lo = box_first(boxes), hi{-1, -1, -1};
+    for (std::size_t l = 1; l < boxes.size(); ++l)
+        if (boxes[l][1][0] >= 0)
+            for (std::size_t a = 0; a < 3; ++a) hi[a] = std::max(hi[a], boxes[l][1][a]);
+    if (hi[0] < 0 || (lo == Index3{0, 0, 0} && hi == Index3{d[0] - 1, d[1] - 1, d[2] - 1})) return std::nullopt;
+    BinaryVolume box;
+    box.grid = volume.grid();
+    for (std::size_t a = 0; a < 3; ++a) {
+        box.grid.dims[a] = hi[a] - lo[a] + 1;
+        box.grid.origin[Eigen::Index(a)] += double(lo[a]) * box.grid.spacing[Eigen::Index(a)];
+    }
+    box.mask.resize(std::size_t(box.grid.voxel_count()));
+#pragma omp parallel for schedule(static)
+    for (std::int64_t k = 0; k < box.grid.dims[2]; ++k)
+        for (std::int64_t j = 0; j < box.grid.dims[1]; ++j) {
+            const std::int64_t from = volume.grid().linear_index(lo[0], lo[1] + j, lo[2] + k);
+            std::uint8_t* to = box.mask.data() + box.grid.linear_index(0, j, k);
+            for (std::int64_t i = 0; i < box.grid.dims[0]; ++i) to[i] = volume.at_linear(from + i) != 0;
+        }
+    return box;
 }
 
 }  // namespace
@@ -156,11 +194,16 @@ ReachMaps reach_maps(const VoxelLabels& volume, double cap) {
     // Every length compared with a distance of the maps is below √3·(cap + one voxel) (the corners
     // of half_local_thickness's box), so distances saturated above this compare the same.
     const double saturation = 2.0 * (cap + grid.spacing.maxCoeff());
+    const LabelBoxes boxes = label_boxes(volume);
     {
         // The background (label 0, the padding included): D to the nearest labelled voxel; on a
         // binary volume, whose one label is the object, its voxels' D to the background too.
+        // On the labelled voxels' box only, when it is not the whole grid: beyond it is background.
         const DistanceTarget target = volume.is_binary() ? DistanceTarget::other_kind : DistanceTarget::object;
-        const PaddedDistanceMap map = padded_distance_transform(volume, target, maps.padding, saturation);
+        const std::optional<BinaryVolume> box = labelled_box(volume, boxes);
+        if (box) maps.first = box_first(boxes);
+        const PaddedDistanceMap map =
+            padded_distance_transform(box ? VoxelLabels(*box) : volume, target, maps.padding, saturation);
         maps.grid = map.grid;
         maps.distance.resize(map.distance.size());
         const auto voxels = static_cast<std::int64_t>(map.distance.size());
@@ -172,7 +215,6 @@ ReachMaps reach_maps(const VoxelLabels& volume, double cap) {
     }
     if (volume.is_binary()) return maps;
     // Every label: D to the nearest voxel of another label (the background included).
-    const std::vector<std::array<Index3, 2>> boxes = label_boxes(volume);
     for (std::uint32_t l = 1; l < boxes.size(); ++l)
         if (boxes[l][1][0] >= 0) fill_label_distances(volume, l, boxes[l], saturation, maps);
     return maps;
@@ -211,7 +253,7 @@ double half_local_thickness(const VoxelLabels& volume, const ReachMaps& maps, co
     limit = std::min(limit, maps.cap);
     const std::uint32_t kind = volume.at(v[0], v[1], v[2]);
     const Eigen::Vector3d& s = maps.grid.spacing;
-    const Index3 centre{v[0] + maps.padding, v[1] + maps.padding, v[2] + maps.padding};
+    const Index3 centre = maps.map_voxel(v);
     Index3 reach;  // a ball of radius ≤ limit containing v has its centre within limit of v
     for (int a = 0; a < 3; ++a) reach[std::size_t(a)] = std::int64_t(std::ceil(limit / s[a]));
     // The result is the largest min(D(y), limit) over the balls that contain v, whatever the
