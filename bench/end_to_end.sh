@@ -10,6 +10,7 @@
 #   DSREG_BENCH_CLAMP=0   without the lobster.vol --clamp case
 #   DSREG_BENCH_VOLUMES="lobster"  only these volumes of ../shared/data (default: all five)
 #   DSREG_BENCH_GOURSAT=0 without the goursat cases
+#   DSREG_BENCH_SPARSE=0  without the small object in a large image (a ball of 60 voxels in 512³)
 #   DSREG_BENCH_GROWTH=1  instead: the growth series, goursat h = 0.5 … DSREG_BENCH_MIN_H (default 0.035)
 # The real volumes are those of ../shared/data (read-only, never copied); the goursat cases are
 # digitized to a .vol first (`dsreg digitize`) so that both pipelines read the same file.
@@ -77,6 +78,12 @@ for f in ${DSREG_BENCH_VOLUMES:-cat10 bunny-64 Al.100 bunny-128 lobster}; do
     [[ -f $data/$f.vol ]] && run_case "$f.vol" "$data/$f.vol" "$data/$f.vol"
 done
 [[ -f $data/lobster.vol && ${DSREG_BENCH_CLAMP:-1} == 1 ]] && run_case "lobster.vol --clamp" "$data/lobster.vol" "$data/lobster.vol" --clamp
+if [[ ${DSREG_BENCH_SPARSE:-1} == 1 ]]; then
+    # An organ-sized object in a CT-sized image: what scales with the image, not the surface.
+    "$dsreg" digitize --shape "x^2+y^2+z^2-9" --box 12.8 --h 0.05 -o "$work/ball-in-512.vol" >/dev/null
+    run_case "ball r=60 vx in 512³" "$work/ball-in-512.vol" "$work/ball-in-512.vol"
+    rm -f "$work/ball-in-512.vol"
+fi
 [[ ${DSREG_BENCH_GOURSAT:-1} == 1 ]] || exit 0
 g=$(goursat_vol 0.25); run_case "goursat h=0.25 .vol, II r=7.56 vx" "$g" "$g" --radius 7.56
 g=$(goursat_vol 0.1); run_case "goursat h=0.1 .vol, II r=13.9 vx" "$g" "$g" --radius 13.9

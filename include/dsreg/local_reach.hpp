@@ -27,9 +27,10 @@ namespace dsreg {
 
 /// D_bg on the object voxels and D_obj on the background voxels, on the bounding box of the
 /// labelled voxels grown by `padding` voxels on every side (volume voxel v is map voxel v −
-/// first + padding), in units of `unit`. Everything outside the box is background, so every
-/// voxel within `padding` of a labelled one is in the maps, whatever the volume around it (a
-/// small structure in a large image costs its box, not the image). Distances above 2·(cap + the
+/// first + padding), in units of `unit`; on the whole grid grown so when that box is not much
+/// smaller (first = 0). Everything outside the box is background, so every voxel within
+/// `padding` of a labelled one is in the maps, whatever the volume around it (a small structure
+/// in a large image costs its box, not the image). Distances above 2·(cap + the
 /// largest spacing) are stored as that value (reach_maps): every length the reaches and
 /// thicknesses compare with them is shorter, so they come out as with the exact distances.
 struct ReachMaps {

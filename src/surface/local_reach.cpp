@@ -155,14 +155,22 @@ Index3 box_first(const LabelBoxes& boxes) {
 }
 
 /// The labelled voxels (any label) of the union of the label boxes as a binary volume placed in
-/// the volume's physical frame, or nothing when that box is the whole grid (or empty).
-std::optional<BinaryVolume> labelled_box(const VoxelLabels& volume, const LabelBoxes& boxes) {
+/// the volume's physical frame, or nothing when that box grown by `padding` would hold more than
+/// kCropAbove of the grown grid's voxels (the copy would cost more than it saves), or is empty.
+constexpr double kCropAbove = 0.7;
+std::optional<BinaryVolume> labelled_box(const VoxelLabels& volume, const LabelBoxes& boxes, std::int64_t padding) {
     const Index3& d = volume.grid().dims;
     Index3 lo = box_first(boxes), hi{-1, -1, -1};
     for (std::size_t l = 1; l < boxes.size(); ++l)
         if (boxes[l][1][0] >= 0)
             for (std::size_t a = 0; a < 3; ++a) hi[a] = std::max(hi[a], boxes[l][1][a]);
-    if (hi[0] < 0 || (lo == Index3{0, 0, 0} && hi == Index3{d[0] - 1, d[1] - 1, d[2] - 1})) return std::nullopt;
+    if (hi[0] < 0) return std::nullopt;
+    double box_voxels = 1, grid_voxels = 1;
+    for (std::size_t a = 0; a < 3; ++a) {
+        box_voxels *= double(hi[a] - lo[a] + 1 + 2 * padding);
+        grid_voxels *= double(d[a] + 2 * padding);
+    }
+    if (box_voxels > kCropAbove * grid_voxels) return std::nullopt;
     BinaryVolume box;
     box.grid = volume.grid();
     for (std::size_t a = 0; a < 3; ++a) {
@@ -198,9 +206,10 @@ ReachMaps reach_maps(const VoxelLabels& volume, double cap) {
     {
         // The background (label 0, the padding included): D to the nearest labelled voxel; on a
         // binary volume, whose one label is the object, its voxels' D to the background too.
-        // On the labelled voxels' box only, when it is not the whole grid: beyond it is background.
+        // On the labelled voxels' box only, when it is much smaller than the grid: beyond it is
+        // background.
         const DistanceTarget target = volume.is_binary() ? DistanceTarget::other_kind : DistanceTarget::object;
-        const std::optional<BinaryVolume> box = labelled_box(volume, boxes);
+        const std::optional<BinaryVolume> box = labelled_box(volume, boxes, maps.padding);
         if (box) maps.first = box_first(boxes);
         const PaddedDistanceMap map =
             padded_distance_transform(box ? VoxelLabels(*box) : volume, target, maps.padding, saturation);
