@@ -115,9 +115,13 @@ public:
     std::vector<std::int64_t> update(const PointMatrix& vertices, const FaceMatrix& triangles,
                                      const std::vector<std::int32_t>& changed);
 
+    /// Whether the centre of voxel `index` (linear, as the grid's) is inside.
+    bool is_inside(std::int64_t index) const {
+        const std::int64_t row = index / grid_.dims[0], i = index - row * grid_.dims[0];
+        return (bits_[std::size_t(row * words_per_row_ + i / 64)] >> (i % 64)) & 1u;
+    }
     /// 1 where the voxel centre is inside, indexed like the grid's voxels.
-    const std::vector<std::uint8_t>& inside() const { return inside_; }
-    std::vector<std::uint8_t> take_inside() { return std::move(inside_); }
+    std::vector<std::uint8_t> inside() const;
 
 private:
     struct RowBox {  ///< rows j0..j1 × k0..k1 (empty if j1 < j0 or k1 < k0)
@@ -131,7 +135,11 @@ private:
     VoxelGrid grid_;
     std::vector<std::vector<std::int32_t>> row_triangles_;  ///< per row j + ny·k: the triangles that may cross its ray
     std::vector<RowBox> triangle_rows_;                     ///< per triangle: the rows listing it
-    std::vector<std::uint8_t> inside_;
+    /// One bit per voxel centre, 1 inside; each row starts on a word of its own, so that rows are
+    /// classified side by side without sharing a word (an eighth of a byte per voxel: the count of
+    /// voxel centres runs on every binary volume, 512³ images included).
+    std::int64_t words_per_row_ = 0;
+    std::vector<std::uint64_t> bits_;
 };
 
 // ---------------------------------------------------------------------------------------------

@@ -82,14 +82,24 @@ void check_triangles(const PointMatrix& vertices, const FaceMatrix& triangles, c
     for (Eigen::Index t = 0; t < triangles.rows(); ++t) check_triangle(vertices, triangles, t, caller);
 }
 
-/// Classifies the voxel centres of row (j, k) into `row_inside` (nx values) against the
-/// triangles [first, last) (those whose y-z box covers the row, in any order: the crossings are
-/// sorted). `crossings` is work space.
+/// Sets bits [from, to) of `words` to 1.
+void set_bits(std::uint64_t* words, std::int64_t from, std::int64_t to) {
+    while (from < to) {
+        const std::int64_t word = from / 64, bit = from % 64, count = std::min<std::int64_t>(64 - bit, to - from);
+        const std::uint64_t ones = count == 64 ? ~std::uint64_t(0) : ((std::uint64_t(1) << count) - 1) << bit;
+        words[word] |= ones;
+        from += count;
+    }
+}
+
+/// Classifies the voxel centres of row (j, k) into `row_words` (nx bits, 1 inside, the words
+/// cleared first) against the triangles [first, last) (those whose y-z box covers the row, in
+/// any order: the crossings are sorted). `crossings` is work space.
 void classify_row(const PointMatrix& vertices, const FaceMatrix& triangles, const VoxelGrid& grid, std::int64_t j,
                   std::int64_t k, const std::int32_t* first, const std::int32_t* last, std::vector<double>& crossings,
-                  std::uint8_t* row_inside) {
+                  std::uint64_t* row_words) {
     const std::int64_t nx = grid.dims[0];
-    std::fill(row_inside, row_inside + nx, std::uint8_t(0));
+    std::fill(row_words, row_words + (nx + 63) / 64, std::uint64_t(0));
     const Eigen::Vector3d start = grid.voxel_center(0, j, k);
     const Point2 ray{start.y(), start.z()};
     crossings.clear();
@@ -112,7 +122,7 @@ void classify_row(const PointMatrix& vertices, const FaceMatrix& triangles, cons
     std::int64_t from = 0;
     for (std::size_t p = 0; p <= m; ++p) {
         const std::int64_t to = p < m ? first_at_or_beyond(crossings[p]) : nx;
-        if ((m - p) % 2 == 1 && to > from) std::fill(row_inside + from, row_inside + to, std::uint8_t(1));
+        if ((m - p) % 2 == 1 && to > from) set_bits(row_words, from, to);
         from = std::max(from, to);
     }
 }
@@ -121,7 +131,8 @@ void classify_row(const PointMatrix& vertices, const FaceMatrix& triangles, cons
 
 VoxelCentresInside::VoxelCentresInside(const PointMatrix& vertices, const FaceMatrix& triangles, const VoxelGrid& grid)
     : grid_(grid), row_triangles_(std::size_t(grid.dims[1] * grid.dims[2])),
-      triangle_rows_(std::size_t(triangles.rows())), inside_(std::size_t(grid.voxel_count()), 0) {
+      triangle_rows_(std::size_t(triangles.rows())), words_per_row_((grid.dims[0] + 63) / 64),
+      bits_(std::size_t(words_per_row_ * grid.dims[1] * grid.dims[2]), 0) {
     check_triangles(vertices, triangles, "voxel_centres_inside");
     for (Eigen::Index t = 0; t < triangles.rows(); ++t) {
         triangle_rows_[std::size_t(t)] = rows_of(vertices, triangles, t);
@@ -206,14 +217,21 @@ void VoxelCentresInside::classify(const PointMatrix& vertices, const FaceMatrix&
             const std::int64_t row = rows[r], j = row % ny, k = row / ny;
             const std::vector<std::int32_t>& listed = row_triangles_[std::size_t(row)];
             classify_row(vertices, triangles, grid_, j, k, listed.data(), listed.data() + listed.size(), crossings,
-                         inside_.data() + grid_.linear_index(0, j, k));
+                         bits_.data() + row * words_per_row_);
         }
     }
 }
 
+std::vector<std::uint8_t> VoxelCentresInside::inside() const {
+    std::vector<std::uint8_t> bytes(std::size_t(grid_.voxel_count()));
+#pragma omp parallel for schedule(static)
+    for (std::int64_t v = 0; v < grid_.voxel_count(); ++v) bytes[std::size_t(v)] = is_inside(v) ? 1 : 0;
+    return bytes;
+}
+
 std::vector<std::uint8_t> voxel_centres_inside(const PointMatrix& vertices, const FaceMatrix& triangles,
                                                const VoxelGrid& grid) {
-    return VoxelCentresInside(vertices, triangles, grid).take_inside();
+    return VoxelCentresInside(vertices, triangles, grid).inside();
 }
 
 }  // namespace dsreg

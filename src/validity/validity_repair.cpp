@@ -151,7 +151,7 @@ private:
     /// Orders pointels by (c, b, a); coordinates from 0 to dims < kKeySide (check_inputs).
     static std::int64_t key(std::int64_t a, std::int64_t b, std::int64_t c) { return a + kKeySide * (b + kKeySide * c); }
 
-    bool is_wrong(std::size_t voxel) const { return (inside_.inside()[voxel] != 0) != (volume_.mask[voxel] != 0); }
+    bool is_wrong(std::size_t voxel) const { return inside_.is_inside(std::int64_t(voxel)) != (volume_.mask[voxel] != 0); }
 
     /// wrong_ after the voxel rows `rows` (index j + ny·k, increasing) were classified again.
     void update_wrong(const std::vector<std::int64_t>& rows) {
