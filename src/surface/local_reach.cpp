@@ -108,6 +108,27 @@ LabelBoxes label_boxes(const VoxelLabels& volume) {
     return boxes;
 }
 
+/// Voxels lo..hi (inclusive) of `volume` as a binary volume placed in its physical frame: a voxel
+/// is set where keep(its label).
+template <class Keep>
+BinaryVolume cropped_indicator(const VoxelLabels& volume, const Index3& lo, const Index3& hi, Keep keep) {
+    BinaryVolume crop;
+    crop.grid = volume.grid();
+    for (std::size_t a = 0; a < 3; ++a) {
+        crop.grid.dims[a] = hi[a] - lo[a] + 1;
+        crop.grid.origin[Eigen::Index(a)] += double(lo[a]) * crop.grid.spacing[Eigen::Index(a)];
+    }
+    crop.mask.resize(std::size_t(crop.grid.voxel_count()));
+#pragma omp parallel for schedule(static)
+    for (std::int64_t k = 0; k < crop.grid.dims[2]; ++k)
+        for (std::int64_t j = 0; j < crop.grid.dims[1]; ++j) {
+            const std::int64_t from = volume.grid().linear_index(lo[0], lo[1] + j, lo[2] + k);
+            std::uint8_t* to = crop.mask.data() + crop.grid.linear_index(0, j, k);
+            for (std::int64_t i = 0; i < crop.grid.dims[0]; ++i) to[i] = keep(volume.at_linear(from + i)) ? 1 : 0;
+        }
+    return crop;
+}
+
 /// D to the other labels on the voxels of label l ≥ 1: the distance transform of its indicator
 /// on its bounding box grown by one voxel (clipped to the grid, whose outside counts as another
 /// label). One voxel is enough, and gives the distances of the whole grid exactly: the nearest
@@ -115,22 +136,12 @@ LabelBoxes label_boxes(const VoxelLabels& volume) {
 /// the bounding box (so of another label) no farther from x.
 void fill_label_distances(const VoxelLabels& volume, std::uint32_t l, const std::array<Index3, 2>& box, double saturation,
                           ReachMaps& maps) {
-    BinaryVolume crop;
     Index3 lo, hi;
     for (std::size_t a = 0; a < 3; ++a) {
         lo[a] = std::max<std::int64_t>(0, box[0][a] - 1);
         hi[a] = std::min<std::int64_t>(volume.grid().dims[a] - 1, box[1][a] + 1);
-        crop.grid.dims[a] = hi[a] - lo[a] + 1;
     }
-    crop.grid.spacing = volume.grid().spacing;
-    crop.mask.resize(std::size_t(crop.grid.voxel_count()));
-#pragma omp parallel for schedule(static)
-    for (std::int64_t k = 0; k < crop.grid.dims[2]; ++k)
-        for (std::int64_t j = 0; j < crop.grid.dims[1]; ++j) {
-            const std::int64_t from = volume.grid().linear_index(lo[0], lo[1] + j, lo[2] + k);
-            std::uint8_t* to = crop.mask.data() + crop.grid.linear_index(0, j, k);
-            for (std::int64_t i = 0; i < crop.grid.dims[0]; ++i) to[i] = volume.at_linear(from + i) == l;
-        }
+    const BinaryVolume crop = cropped_indicator(volume, lo, hi, [l](std::uint32_t label) { return label == l; });
     const std::vector<float> distance = euclidean_distance_transform(crop, DistanceTarget::background, saturation);
 #pragma omp parallel for schedule(static)
     for (std::int64_t k = 0; k < crop.grid.dims[2]; ++k)
@@ -171,21 +182,7 @@ std::optional<BinaryVolume> labelled_box(const VoxelLabels& volume, const LabelB
         grid_voxels *= double(d[a] + 2 * padding);
     }
     if (box_voxels > kCropAbove * grid_voxels) return std::nullopt;
-    BinaryVolume box;
-    box.grid = volume.grid();
-    for (std::size_t a = 0; a < 3; ++a) {
-        box.grid.dims[a] = hi[a] - lo[a] + 1;
-        box.grid.origin[Eigen::Index(a)] += double(lo[a]) * box.grid.spacing[Eigen::Index(a)];
-    }
-    box.mask.resize(std::size_t(box.grid.voxel_count()));
-#pragma omp parallel for schedule(static)
-    for (std::int64_t k = 0; k < box.grid.dims[2]; ++k)
-        for (std::int64_t j = 0; j < box.grid.dims[1]; ++j) {
-            const std::int64_t from = volume.grid().linear_index(lo[0], lo[1] + j, lo[2] + k);
-            std::uint8_t* to = box.mask.data() + box.grid.linear_index(0, j, k);
-            for (std::int64_t i = 0; i < box.grid.dims[0]; ++i) to[i] = volume.at_linear(from + i) != 0;
-        }
-    return box;
+    return cropped_indicator(volume, lo, hi, [](std::uint32_t label) { return label != 0; });
 }
 
 }  // namespace
