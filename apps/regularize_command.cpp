@@ -308,10 +308,10 @@ void add_pipeline_flags(CLI::App& command, RegularizeCommand& c) {
     command.add_flag("--no-check", c.flags.no_check, "Do not even count them (implies --no-repair)");
     CLI::Option* keep_voxels =
         command.add_flag("--keep-voxels", c.flags.keep_voxels,
-                         "The repair also puts back every voxel centre the solved mesh has on the wrong side (except "
-                         "where the voxels are noisy), bounding the vertices around it along their faces' axes; by "
-                         "default only when the object voxels left outside are at least 1 % of the object's "
-                         "(docs/validity.md)");
+                         "Put back every voxel centre the solved mesh has on the wrong side, however few (except where "
+                         "the voxels are noisy), bounding the vertices around it along their faces' axes; by default "
+                         "they are put back only when the object voxels left outside are at least 1 % of the "
+                         "object's (docs/validity.md)");
     command.add_flag("--no-keep-voxels", c.flags.no_keep_voxels,
                      "Leave the voxel centres as the solve puts them, and do not count them")
         ->excludes(keep_voxels);
