@@ -155,34 +155,33 @@ void fill_label_distances(const VoxelLabels& volume, std::uint32_t l, const std:
             }
 }
 
-/// The lowest corner of the union of the label boxes (index 0 unused; a box with hi < lo absent).
-Index3 box_first(const LabelBoxes& boxes) {
-    Index3 first{std::numeric_limits<std::int64_t>::max(), std::numeric_limits<std::int64_t>::max(),
-                 std::numeric_limits<std::int64_t>::max()};
+/// The union of the label boxes (index 0 unused; a box with hi < lo absent), hi < lo if none.
+std::array<Index3, 2> union_box(const LabelBoxes& boxes) {
+    constexpr std::int64_t kLarge = std::numeric_limits<std::int64_t>::max();
+    std::array<Index3, 2> box{Index3{kLarge, kLarge, kLarge}, Index3{-1, -1, -1}};
     for (std::size_t l = 1; l < boxes.size(); ++l)
         if (boxes[l][1][0] >= 0)
-            for (std::size_t a = 0; a < 3; ++a) first[a] = std::min(first[a], boxes[l][0][a]);
-    return first;
+            for (std::size_t a = 0; a < 3; ++a) {
+                box[0][a] = std::min(box[0][a], boxes[l][0][a]);
+                box[1][a] = std::max(box[1][a], boxes[l][1][a]);
+            }
+    return box;
 }
 
-/// The labelled voxels (any label) of the union of the label boxes as a binary volume placed in
-/// the volume's physical frame, or nothing when that box grown by `padding` would hold more than
-/// kCropAbove of the grown grid's voxels (the copy would cost more than it saves), or is empty.
+/// The labelled voxels (any label) of `box` as a binary volume placed in the volume's physical
+/// frame, or nothing when the box grown by `padding` would hold more than kCropAbove of the grown
+/// grid's voxels (the copy would cost more than it saves), or is empty.
 constexpr double kCropAbove = 0.7;
-std::optional<BinaryVolume> labelled_box(const VoxelLabels& volume, const LabelBoxes& boxes, std::int64_t padding) {
+std::optional<BinaryVolume> labelled_box(const VoxelLabels& volume, const std::array<Index3, 2>& box, std::int64_t padding) {
     const Index3& d = volume.grid().dims;
-    Index3 lo = box_first(boxes), hi{-1, -1, -1};
-    for (std::size_t l = 1; l < boxes.size(); ++l)
-        if (boxes[l][1][0] >= 0)
-            for (std::size_t a = 0; a < 3; ++a) hi[a] = std::max(hi[a], boxes[l][1][a]);
-    if (hi[0] < 0) return std::nullopt;
+    if (box[1][0] < 0) return std::nullopt;
     double box_voxels = 1, grid_voxels = 1;
     for (std::size_t a = 0; a < 3; ++a) {
-        box_voxels *= double(hi[a] - lo[a] + 1 + 2 * padding);
+        box_voxels *= double(box[1][a] - box[0][a] + 1 + 2 * padding);
         grid_voxels *= double(d[a] + 2 * padding);
     }
     if (box_voxels > kCropAbove * grid_voxels) return std::nullopt;
-    return cropped_indicator(volume, lo, hi, [](std::uint32_t label) { return label != 0; });
+    return cropped_indicator(volume, box[0], box[1], [](std::uint32_t label) { return label != 0; });
 }
 
 }  // namespace
@@ -206,8 +205,9 @@ ReachMaps reach_maps(const VoxelLabels& volume, double cap) {
         // On the labelled voxels' box only, when it is much smaller than the grid: beyond it is
         // background.
         const DistanceTarget target = volume.is_binary() ? DistanceTarget::other_kind : DistanceTarget::object;
-        const std::optional<BinaryVolume> box = labelled_box(volume, boxes, maps.padding);
-        if (box) maps.first = box_first(boxes);
+        const std::array<Index3, 2> labelled = union_box(boxes);
+        const std::optional<BinaryVolume> box = labelled_box(volume, labelled, maps.padding);
+        if (box) maps.first = labelled[0];
         const PaddedDistanceMap map =
             padded_distance_transform(box ? VoxelLabels(*box) : volume, target, maps.padding, saturation);
         maps.grid = map.grid;

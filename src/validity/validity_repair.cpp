@@ -97,9 +97,14 @@ public:
                                                surface.vertex_pointels(v, 2)),
                                            std::int32_t(v));
         std::sort(pointel_vertices_.begin(), pointel_vertices_.end());
-        for (std::size_t v = 0; v < volume.mask.size(); ++v)
+        for (std::size_t v = 0; v < volume.mask.size(); ++v) {
+            object_voxels_ += volume.mask[v] != 0 ? 1 : 0;
             if (is_wrong(v)) wrong_.push_back(std::int64_t(v));
+        }
     }
+
+    /// The object voxels of the volume (counted on the scan for the wrong ones).
+    std::int64_t object_voxels() const { return object_voxels_; }
 
     /// The vertices in `moved` are now at their rows of `positions`.
     void update(const PointMatrix& positions, const std::vector<std::int32_t>& moved) {
@@ -177,6 +182,7 @@ private:
     VoxelCentresInside inside_;      ///< the voxel centres inside the mesh of triangles_
     const VertexCorners& corners_;  ///< the quads around each vertex
     std::vector<std::int64_t> wrong_;  ///< the voxels whose centre is on the wrong side, increasing
+    std::int64_t object_voxels_ = 0;
     std::vector<std::pair<std::int64_t, std::int32_t>> pointel_vertices_;  ///< (pointel key, vertex), sorted
 };
 
@@ -1124,7 +1130,7 @@ ValidityRepairResult repair_validity(const DigitalSurface& surface, const PointM
         report.voxels_put_back =
             !to_fix.empty() && (options.put_back_from_share <= 0 ||
                                 double(report.outside_object_voxels_before) >=
-                                    options.put_back_from_share * double(options.voxels->object_voxel_count()));
+                                    options.put_back_from_share * double(sides->object_voxels()));
     }
     const auto record_voxels = [&] {
         if (!sides) return;
