@@ -28,9 +28,13 @@ std::int64_t length_in_steps(const ReachMaps& maps, double length) {
 }
 
 /// Whether the ball of radius `steps` (stored distance) centred at a voxel centre contains a
-/// point at `length` from it (strictly), both in the maps' steps.
-bool ball_contains(const ReachMaps& maps, std::uint16_t steps, double length) {
-    return length_in_steps(maps, length) < std::int64_t(steps);
+/// point at `squared_length` (physical, squared) from it, strictly: whether the length in steps
+/// (length_in_steps) is below `steps`. For a whole number s, ⌊x + 10⁻³⌋ < s is x < s − 10⁻³, so
+/// the test is a comparison of squares, without the root and the division of the length (the
+/// inner loop of the rays and of the thickness search).
+bool ball_contains(const ReachMaps& maps, std::uint16_t steps, double squared_length) {
+    const double radius = (double(steps) - 1e-3) * maps.unit;
+    return steps > 0 && squared_length < radius * radius;
 }
 
 /// The grown-grid voxel whose box contains the physical point p, or false outside the grown grid.
@@ -62,8 +66,9 @@ double reach_along(const VoxelLabels& volume, const ReachMaps& maps, std::uint32
         previous = y;
         if (label_at(volume, maps, y) != label) break;
         const std::uint16_t steps = maps.distance[std::size_t(maps.grid.linear_index(y[0], y[1], y[2]))];
-        if (ball_contains(maps, steps, (maps.grid.voxel_center(y[0], y[1], y[2]) - anchor).norm()))
-            best = std::max(best, maps.unit * steps);
+        if (maps.unit * steps > best &&
+            ball_contains(maps, steps, (maps.grid.voxel_center(y[0], y[1], y[2]) - anchor).squaredNorm()))
+            best = maps.unit * steps;
         if (best >= maps.cap) break;
     }
     return std::min(best, maps.cap);
@@ -279,7 +284,7 @@ double half_local_thickness(const VoxelLabels& volume, const ReachMaps& maps, co
                 if (d <= best || label_at(volume, maps, {i, j, k}) != kind) continue;
                 const Eigen::Vector3d to_v(double(i - centre[0]) * s.x(), double(j - centre[1]) * s.y(),
                                            double(k - centre[2]) * s.z());
-                if (ball_contains(maps, steps, to_v.norm())) best = std::min(d, limit);
+                if (ball_contains(maps, steps, to_v.squaredNorm())) best = std::min(d, limit);
                 if (best >= limit) return limit;
             }
         }
