@@ -583,7 +583,7 @@ private:
             changed.push_back(v);
             if (smooth_first(v)) {
                 double& n = fair_factor_[std::size_t(v)];
-                if (n == 1) fair_vertices_.push_back(v);
+                if (n == 1) add_fair_vertex(v);
                 n = std::max(n * o_.fairness_step, o_.fairness_start);
                 ++fair_steps_[std::size_t(v)];
                 for (std::int64_t k = links_.offsets[std::size_t(v)]; k < links_.offsets[std::size_t(v) + 1]; ++k)
@@ -619,6 +619,17 @@ private:
         std::sort(changed.begin(), changed.end());
         changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
         return changed;
+    }
+
+    /// Lists v among the vertices whose fairness factor was raised, and its term at the vertices
+    /// whose rows it reaches: v and its link.
+    void add_fair_vertex(std::int32_t v) {
+        if (fair_terms_at_.empty()) fair_terms_at_.resize(std::size_t(surface_.vertex_count()));
+        const auto term = std::int32_t(fair_vertices_.size());
+        fair_vertices_.push_back(v);
+        fair_terms_at_[std::size_t(v)].push_back(term);
+        for (std::int64_t k = links_.offsets[std::size_t(v)]; k < links_.offsets[std::size_t(v) + 1]; ++k)
+            fair_terms_at_[std::size_t(links_.neighbors[std::size_t(k)])].push_back(term);
     }
 
     /// Whether v is at the inner corner of a turn of a junction curve (strengthened alone).
@@ -755,17 +766,22 @@ private:
     template <class Entry>
     void add_fairness_terms(const std::vector<std::int32_t>& part, Entry& entry, Eigen::VectorXd& b, std::size_t first,
                             std::size_t last) const {
-        const auto in_rows = [&](std::int32_t v) {
-            const std::int32_t l = local_[std::size_t(v)];
-            return l >= 0 && std::size_t(l) >= first && std::size_t(l) < last;
-        };
+        if (fair_terms_at_.empty()) return;
+        // The terms that reach the rows, in the order the vertices were raised (that of the sums
+        // at each entry): looked up at the rows' vertices, not found among all the raised ones
+        // (lobster.vol: a third of the assembly of its 1 440 parts went to that search).
+        std::vector<std::int32_t> reaching;
+        for (std::size_t k = first; k < last; ++k) {
+            const std::vector<std::int32_t>& terms = fair_terms_at_[std::size_t(part[k])];
+            reaching.insert(reaching.end(), terms.begin(), terms.end());
+        }
+        std::sort(reaching.begin(), reaching.end());
+        reaching.erase(std::unique(reaching.begin(), reaching.end()), reaching.end());
         std::vector<std::pair<std::int32_t, double>> term;
-        for (const std::int32_t i : fair_vertices_) {
+        for (const std::int32_t raised : reaching) {
+            const std::int32_t i = fair_vertices_[std::size_t(raised)];
             const std::int64_t begin = links_.offsets[std::size_t(i)], end = links_.offsets[std::size_t(i) + 1];
             if (end == begin) continue;
-            bool reaches = in_rows(i);
-            for (std::int64_t k = begin; k < end && !reaches; ++k) reaches = in_rows(links_.neighbors[std::size_t(k)]);
-            if (!reaches) continue;
             const double e = (fair_factor_[std::size_t(i)] - 1) * weights_.gamma * detail::fairness_weight(weights_, i);
             // With e = 0 (γ γ_i w0_i = 0) R does not couple the term's vertices, so they may lie in
             // other parts, whose local indices local_ holds too when parts are solved side by side.
@@ -1026,6 +1042,9 @@ private:
     std::vector<double> fair_factor_;         ///< n_i, the fairness factors (fairness_steps)
     std::vector<int> fair_steps_;             ///< times n_i was raised
     std::vector<std::int32_t> fair_vertices_;  ///< the i with n_i > 1, in the order they were raised
+    /// Per vertex, the positions in fair_vertices_ of the terms whose rows it is in (the vertex
+    /// itself and its link's); empty until the first vertex is raised.
+    std::vector<std::vector<std::int32_t>> fair_terms_at_;
     std::vector<char> held_;
     std::vector<char> junction_turn_;  ///< junction_turn_vertices, or empty (binary, grade_junction_turns)
     std::vector<char> in_region_;
