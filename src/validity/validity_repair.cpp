@@ -583,7 +583,7 @@ private:
             changed.push_back(v);
             if (smooth_first(v)) {
                 double& n = fair_factor_[std::size_t(v)];
-                if (n == 1) add_fair_vertex(v);
+                if (n == 1) fair_vertices_.push_back(v);
                 n = std::max(n * o_.fairness_step, o_.fairness_start);
                 ++fair_steps_[std::size_t(v)];
                 for (std::int64_t k = links_.offsets[std::size_t(v)]; k < links_.offsets[std::size_t(v) + 1]; ++k)
@@ -618,18 +618,28 @@ private:
         }
         std::sort(changed.begin(), changed.end());
         changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
+        index_fair_terms();
         return changed;
     }
 
-    /// Lists v among the vertices whose fairness factor was raised, and its term at the vertices
-    /// whose rows it reaches: v and its link.
-    void add_fair_vertex(std::int32_t v) {
-        if (fair_terms_at_.empty()) fair_terms_at_.resize(std::size_t(surface_.vertex_count()));
-        const auto term = std::int32_t(fair_vertices_.size());
-        fair_vertices_.push_back(v);
-        fair_terms_at_[std::size_t(v)].push_back(term);
-        for (std::int64_t k = links_.offsets[std::size_t(v)]; k < links_.offsets[std::size_t(v) + 1]; ++k)
-            fair_terms_at_[std::size_t(links_.neighbors[std::size_t(k)])].push_back(term);
+    /// Indexes the raised fairness terms by the vertices whose rows they reach (the raised vertex
+    /// and its link), each vertex's in the order they were raised: fair_term_offsets_ and
+    /// fair_term_entries_, rebuilt when vertices were raised since.
+    void index_fair_terms() {
+        if (fair_terms_indexed_ == fair_vertices_.size()) return;
+        fair_terms_indexed_ = fair_vertices_.size();
+        const auto for_each_row = [&](std::int32_t i, auto visit) {
+            visit(i);
+            for (std::int64_t k = links_.offsets[std::size_t(i)]; k < links_.offsets[std::size_t(i) + 1]; ++k)
+                visit(links_.neighbors[std::size_t(k)]);
+        };
+        fair_term_offsets_.assign(std::size_t(surface_.vertex_count()) + 1, 0);
+        for (const std::int32_t i : fair_vertices_) for_each_row(i, [&](std::int32_t v) { ++fair_term_offsets_[std::size_t(v) + 1]; });
+        for (std::size_t v = 0; v + 1 < fair_term_offsets_.size(); ++v) fair_term_offsets_[v + 1] += fair_term_offsets_[v];
+        fair_term_entries_.resize(std::size_t(fair_term_offsets_.back()));
+        std::vector<std::int64_t> cursor(fair_term_offsets_.begin(), fair_term_offsets_.end() - 1);
+        for (std::size_t t = 0; t < fair_vertices_.size(); ++t)
+            for_each_row(fair_vertices_[t], [&](std::int32_t v) { fair_term_entries_[std::size_t(cursor[std::size_t(v)]++)] = std::int32_t(t); });
     }
 
     /// Whether v is at the inner corner of a turn of a junction curve (strengthened alone).
@@ -766,14 +776,15 @@ private:
     template <class Entry>
     void add_fairness_terms(const std::vector<std::int32_t>& part, Entry& entry, Eigen::VectorXd& b, std::size_t first,
                             std::size_t last) const {
-        if (fair_terms_at_.empty()) return;
+        if (fair_term_offsets_.empty()) return;
         // The terms that reach the rows, in the order the vertices were raised (that of the sums
         // at each entry): looked up at the rows' vertices, not found among all the raised ones
         // (lobster.vol: a third of the assembly of its 1 440 parts went to that search).
         std::vector<std::int32_t> reaching;
         for (std::size_t k = first; k < last; ++k) {
-            const std::vector<std::int32_t>& terms = fair_terms_at_[std::size_t(part[k])];
-            reaching.insert(reaching.end(), terms.begin(), terms.end());
+            const std::size_t v = std::size_t(part[k]);
+            reaching.insert(reaching.end(), fair_term_entries_.begin() + std::ptrdiff_t(fair_term_offsets_[v]),
+                            fair_term_entries_.begin() + std::ptrdiff_t(fair_term_offsets_[v + 1]));
         }
         std::sort(reaching.begin(), reaching.end());
         reaching.erase(std::unique(reaching.begin(), reaching.end()), reaching.end());
@@ -1042,9 +1053,12 @@ private:
     std::vector<double> fair_factor_;         ///< n_i, the fairness factors (fairness_steps)
     std::vector<int> fair_steps_;             ///< times n_i was raised
     std::vector<std::int32_t> fair_vertices_;  ///< the i with n_i > 1, in the order they were raised
-    /// Per vertex, the positions in fair_vertices_ of the terms whose rows it is in (the vertex
-    /// itself and its link's); empty until the first vertex is raised.
-    std::vector<std::vector<std::int32_t>> fair_terms_at_;
+    /// Per vertex v, the positions in fair_vertices_ of the terms whose rows v is in (the raised
+    /// vertex itself and its link): entries [offsets[v], offsets[v + 1]) (index_fair_terms);
+    /// empty until the first vertex is raised.
+    std::vector<std::int64_t> fair_term_offsets_;
+    std::vector<std::int32_t> fair_term_entries_;
+    std::size_t fair_terms_indexed_ = 0;  ///< fair_vertices_ indexed so far
     std::vector<char> held_;
     std::vector<char> junction_turn_;  ///< junction_turn_vertices, or empty (binary, grade_junction_turns)
     std::vector<char> in_region_;
