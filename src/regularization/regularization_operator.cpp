@@ -56,26 +56,6 @@ RegularizationOperator::RegularizationOperator(const FaceMatrix& quads, const Ve
     }
 }
 
-/// Calls visit(i, F_ij) for every row i of F with an entry in column j, in increasing i (an i
-/// with j several times in its link is visited once per occurrence).
-template <class Visit>
-void RegularizationOperator::for_each_fairness_row(std::int64_t j, Visit visit) const {
-    const std::int32_t* in = in_.neighbors.data();
-    std::int64_t q = in_.offsets[std::size_t(j)];
-    const std::int64_t last = in_.offsets[std::size_t(j + 1)];
-    bool self_done = false;
-    const auto self = [&] {
-        self_done = true;
-        if (fair_weight_[std::size_t(j)] != 0) visit(j, 1.0);
-    };
-    for (; q < last; ++q) {
-        const std::int64_t i = in[q];
-        if (!self_done && j <= i) self();
-        if (fair_weight_[std::size_t(i)] != 0) visit(i, -1.0 / double(links_.size(i)));
-    }
-    if (!self_done) self();
-}
-
 /// Block row j of R (eq. 22–23):
 ///   R_jk = (α α_j w0_j [j = k] + γ Σ_i γ_i w0_i F_ij F_ik) I3 + β Σ_f β_f w2_f (±u_f u_fᵀ per edge),
 /// with F = I − B (eq. 13–14; F_ii = 1, F_ik = −1/|link(i)| for k ∈ link(i), row i empty if the
@@ -91,20 +71,7 @@ void RegularizationOperator::row(std::int64_t j, Row& s, bool values) const {
             s.columns.push_back(c);
         }
     };
-    touch(std::int32_t(j));
-    for (std::int64_t q = links_.offsets[std::size_t(j)]; q < links_.offsets[std::size_t(j + 1)]; ++q) touch(links_.neighbors[std::size_t(q)]);
-    for (std::int64_t q = in_.offsets[std::size_t(j)]; q < in_.offsets[std::size_t(j + 1)]; ++q) touch(in_.neighbors[std::size_t(q)]);
-    // The face neighbours of j are in its links on a manifold, not always on a label complex
-    // (a junction vertex is linked along its junction curve only, a junction point not at all).
-    for (std::int64_t q = corners_.offsets[std::size_t(j)]; q < corners_.offsets[std::size_t(j + 1)]; ++q) {
-        const std::int64_t f = corners_.codes[std::size_t(q)] / k_, e = corners_.codes[std::size_t(q)] % k_;
-        touch(quads_(f, (e + 1) % k_));
-        touch(quads_(f, (e + k_ - 1) % k_));
-    }
-    if (fairness_)
-        for_each_fairness_row(j, [&](std::int64_t i, double) {
-            for (std::int64_t q = links_.offsets[std::size_t(i)]; q < links_.offsets[std::size_t(i + 1)]; ++q) touch(links_.neighbors[std::size_t(q)]);
-        });
+    for_each_coupled(j, touch);
     std::sort(s.columns.begin(), s.columns.end());
     for (std::size_t q = 0; q < s.columns.size(); ++q) s.slot[std::size_t(s.columns[q])] = std::int32_t(q);
     const auto slot = [&](std::int64_t c) { return std::size_t(s.slot[std::size_t(c)]); };

@@ -62,6 +62,10 @@ public:
     };
     /// Fills `row` with block row j (pattern only if `values` is false: columns and full).
     void row(std::int64_t j, Row& row, bool values) const;
+    /// Calls visit(c) for each column c of block row j (the columns of row(), j included), some
+    /// more than once, in no particular order: the coupling alone, without sorting the row.
+    template <class Visit>
+    void for_each_coupled(std::int64_t j, Visit visit) const;
 
     /// Diagonal blocks and ‖R‖∞ (largest absolute row sum), from one pass over the block rows.
     struct Summary {
@@ -89,6 +93,44 @@ private:
     bool fairness_ = false;
     mutable Eigen::VectorXd scaled_residual_;     ///< multiply(): G F x / |link|, per vertex
 };
+
+/// Calls visit(i, F_ij) for every row i of F with an entry in column j, in increasing i (an i
+/// with j several times in its link is visited once per occurrence).
+template <class Visit>
+void RegularizationOperator::for_each_fairness_row(std::int64_t j, Visit visit) const {
+    const std::int32_t* in = in_.neighbors.data();
+    std::int64_t q = in_.offsets[std::size_t(j)];
+    const std::int64_t last = in_.offsets[std::size_t(j + 1)];
+    bool self_done = false;
+    const auto self = [&] {
+        self_done = true;
+        if (fair_weight_[std::size_t(j)] != 0) visit(j, 1.0);
+    };
+    for (; q < last; ++q) {
+        const std::int64_t i = in[q];
+        if (!self_done && j <= i) self();
+        if (fair_weight_[std::size_t(i)] != 0) visit(i, -1.0 / double(links_.size(i)));
+    }
+    if (!self_done) self();
+}
+
+template <class Visit>
+void RegularizationOperator::for_each_coupled(std::int64_t j, Visit visit) const {
+    visit(std::int32_t(j));
+    for (std::int64_t q = links_.offsets[std::size_t(j)]; q < links_.offsets[std::size_t(j + 1)]; ++q) visit(links_.neighbors[std::size_t(q)]);
+    for (std::int64_t q = in_.offsets[std::size_t(j)]; q < in_.offsets[std::size_t(j + 1)]; ++q) visit(in_.neighbors[std::size_t(q)]);
+    // The face neighbours of j are in its links on a manifold, not always on a label complex
+    // (a junction vertex is linked along its junction curve only, a junction point not at all).
+    for (std::int64_t q = corners_.offsets[std::size_t(j)]; q < corners_.offsets[std::size_t(j + 1)]; ++q) {
+        const std::int64_t f = corners_.codes[std::size_t(q)] / k_, e = corners_.codes[std::size_t(q)] % k_;
+        visit(quads_(f, (e + 1) % k_));
+        visit(quads_(f, (e + k_ - 1) % k_));
+    }
+    if (fairness_)
+        for_each_fairness_row(j, [&](std::int64_t i, double) {
+            for (std::int64_t q = links_.offsets[std::size_t(i)]; q < links_.offsets[std::size_t(i + 1)]; ++q) visit(links_.neighbors[std::size_t(q)]);
+        });
+}
 
 /// Writes R, assembled, into `R` (Eigen 3.4's SparseMatrix has no move assignment: returning it
 /// would copy), block row by block row: a block with an alignment part is stored full (9

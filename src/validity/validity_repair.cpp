@@ -663,15 +663,13 @@ private:
         for (const std::int32_t v : vertices) mark_[std::size_t(v)] = 1;
         detail::DisjointSets<> parts(mark_.size());  // the connected parts of the region
         std::vector<char> touched(vertices.size(), 0);  ///< the vertex or one coupled to it changed
-        detail::RegularizationOperator::Row& row = row_scratch_.front();
         for (std::size_t k = 0; k < vertices.size(); ++k) {
             const std::int32_t v = vertices[k];
-            rows_.row(v, row, false);
             touched[k] = changed_[std::size_t(v)];
-            for (const std::int32_t c : row.columns) {
+            rows_.for_each_coupled(v, [&](std::int32_t c) {
                 if (mark_[std::size_t(c)]) parts.unite(v, c);
                 touched[k] |= changed_[std::size_t(c)];
-            }
+            });
         }
         std::vector<std::int64_t> index_of_root(mark_.size(), -1);
         std::vector<std::vector<std::int32_t>> groups;
