@@ -161,6 +161,45 @@ TEST(RegularizationOperator, OnALabelComplexProductEqualsTheAssembledMatrixOfThe
     }
 }
 
+/// The columns for_each_coupled visits at vertex j, each once.
+std::set<std::int32_t> coupled_columns(const detail::RegularizationOperator& R, std::int64_t j) {
+    std::set<std::int32_t> columns;
+    R.for_each_coupled(j, [&](std::int32_t c) { columns.insert(c); });
+    return columns;
+}
+
+/// The vertex coupling that splits the repair's regions into independent parts: the columns
+/// visited are those of the block row, and they hold every non-zero of the rows of R as eq.
+/// (22–23) assembles it term by term (assemble_regularization_system, not the operator's rows;
+/// on the binary cases and on the label complex, whose junction vertices are linked along their
+/// curves only).
+void expect_coupling_covers_the_matrix(const DigitalSurface& surface, const VertexLinks& links, const PointMatrix& normals,
+                                       const RegularizationWeights& weights) {
+    const std::int64_t vertex_count = surface.vertex_count();
+    const detail::RegularizationOperator R(surface.quads, links, normals, weights, vertex_count);
+    const Eigen::SparseMatrix<double> matrix =  // symmetric: column 3j + a holds row 3j + a
+        assemble_regularization_system(surface.vertices, surface.quads, links, normals, weights).matrix;
+    detail::RegularizationOperator::Row row(vertex_count);
+    for (std::int64_t j = 0; j < vertex_count; ++j) {
+        const std::set<std::int32_t> coupled = coupled_columns(R, j);
+        for (int a = 0; a < 3; ++a)
+            for (Eigen::SparseMatrix<double>::InnerIterator it(matrix, 3 * j + a); it; ++it)
+                if (it.value() != 0) ASSERT_TRUE(coupled.count(std::int32_t(it.row() / 3))) << "vertex " << j;
+        R.row(j, row, false);
+        ASSERT_EQ(coupled, std::set<std::int32_t>(row.columns.begin(), row.columns.end())) << "vertex " << j;
+    }
+}
+
+TEST(RegularizationOperator, CoupledColumnsAreTheRowsColumnsAndHoldEveryNonZero) {
+    for (const Case& c : cases()) {
+        SCOPED_TRACE(c.name);
+        expect_coupling_covers_the_matrix(c.surface, vertex_links(c.surface.quads, c.surface.vertex_count()), c.normals,
+                                          c.weights);
+    }
+    const LabelCase& c = label_case();
+    expect_coupling_covers_the_matrix(c.surface, c.links, c.normals, c.weights);
+}
+
 TEST(RegularizationOperator, SummaryAndFineLevelEqualThoseOfTheAssembledMatrix) {
     for (const Case& c : cases()) {
         const VertexLinks links = vertex_links(c.surface.quads, c.surface.vertex_count());

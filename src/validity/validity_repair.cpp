@@ -776,8 +776,8 @@ private:
                             std::size_t last) const {
         if (fair_term_offsets_.empty()) return;
         // The terms that reach the rows, in the order the vertices were raised (that of the sums
-        // at each entry): looked up at the rows' vertices, not found among all the raised ones
-        // (lobster.vol: a third of the assembly of its 1 440 parts went to that search).
+        // at each entry): looked up at the rows' vertices, not searched for among all the raised
+        // ones (lobster.vol: 1 440 parts solved, up to 14 616 raised vertices).
         std::vector<std::int32_t> reaching;
         for (std::size_t k = first; k < last; ++k) {
             const std::size_t v = std::size_t(part[k]);
